@@ -1,0 +1,88 @@
+//! Bilinear isoparametric shape functions N = ¼(1±ξ)(1±η) (Abe, Johansson & Konagai 2005,
+//! eqs 19–20) on the terrain grid and on the regular grid: 4-node stencils.
+//!
+//! # Glossary
+//! - a = (1+ξ)/2, b = (1+η)/2 ∈ [0, 1]: the point's fractions across its cell (eqs 19, 20).
+//! - stencil order: nodes (i, j), (i+1, j), (i, j+1), (i+1, j+1) of cell (i, j), i.e. the
+//!   paper's corners 1, 2, 3, 4; weights (1−a)(1−b), a(1−b), (1−a)b, ab.
+//! - l, h: cell width and (vertical) row spacing; s: ground slope in the column; units SI.
+//!
+//! Gradients go through the inverse Jacobian, which is constant in each cell of both grids:
+//! terrain ∂a/∂x = 1/l, ∂b/∂x = −s/h, ∂b/∂y = 1/h; regular ∂a/∂x = 1/dx, ∂b/∂y = 1/dy.
+//! N is C⁰ across cell edges and its gradient jumps there: that jump is the cell-crossing error
+//! of the paper's §2(3), which [`Gimp`](crate::Gimp) and
+//! [`QuadraticBSpline`](crate::QuadraticBSpline) remove.
+
+use crate::error::LocateError;
+use crate::math::Vector;
+use crate::node::{BoundaryNormals, NodeId};
+use crate::regular::RegularGrid;
+use crate::stencil::{ShapeFunctions, Stencil};
+use crate::terrain::TerrainGrid;
+
+/// Bilinear isoparametric shape functions over grid `G` (a [`TerrainGrid`] or a
+/// [`RegularGrid`]): [`ShapeFunctions<4>`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bilinear<G>(pub G);
+
+/// weights and (∂N/∂a, ∂N/∂b) of the four corners at fractions (a, b).
+#[inline(always)]
+fn unit_square(a: f64, b: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+    let (am, bm) = (1.0 - a, 1.0 - b);
+    ([am * bm, a * bm, am * b, a * b], [-bm, bm, -b, b], [-am, -a, am, a])
+}
+
+#[inline(always)]
+fn corner_nodes(i: i32, j: i32) -> [NodeId; 4] {
+    [NodeId::new(i, j), NodeId::new(i + 1, j), NodeId::new(i, j + 1), NodeId::new(i + 1, j + 1)]
+}
+
+impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
+    #[inline]
+    fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
+        let g = &self.0;
+        let loc = g.locate_parts(x)?;
+        let (w, na, nb) = unit_square(loc.a, loc.b);
+        let (inv_l, inv_h) = g.inverse_sizes();
+        let db_dx = -loc.slope * inv_h;
+        let gradients =
+            [0, 1, 2, 3].map(|k| Vector::new(na[k] * inv_l + nb[k] * db_dx, nb[k] * inv_h));
+        Ok(Stencil { nodes: corner_nodes(loc.i as i32, loc.j as i32), weights: w, gradients })
+    }
+
+    fn node_position(&self, node: NodeId) -> Vector {
+        self.0.node_position(node)
+    }
+
+    fn min_cell_size(&self) -> f64 {
+        self.0.min_cell_size()
+    }
+
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        self.0.boundary_normals(node)
+    }
+}
+
+impl ShapeFunctions<4> for Bilinear<RegularGrid> {
+    #[inline]
+    fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
+        let g = &self.0;
+        let (i, j, a, b) = g.cell_of_units(g.units_of(x)?);
+        let (w, na, nb) = unit_square(a, b);
+        let inv = g.inverse_cell_size();
+        let gradients = [0, 1, 2, 3].map(|k| Vector::new(na[k] * inv.x, nb[k] * inv.y));
+        Ok(Stencil { nodes: corner_nodes(i, j), weights: w, gradients })
+    }
+
+    fn node_position(&self, node: NodeId) -> Vector {
+        self.0.node_position(node)
+    }
+
+    fn min_cell_size(&self) -> f64 {
+        self.0.min_cell_size()
+    }
+
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        self.0.boundary_normals(node)
+    }
+}

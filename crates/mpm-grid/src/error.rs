@@ -1,0 +1,154 @@
+//! Typed errors: why a grid could not be built and why a point could not be located.
+
+/// Why a point could not be located in a grid. Every variant carries the offending point.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum LocateError {
+    /// a coordinate is NaN or infinite.
+    #[error("point ({x}, {y}) has a non-finite coordinate")]
+    NonFinite {
+        /// x of the point, m.
+        x: f64,
+        /// y of the point, m.
+        y: f64,
+    },
+    /// the point lies left or right of the grid's x range, or above its top row.
+    #[error("point ({x}, {y}) lies outside the grid (left, right or above it)")]
+    Outside {
+        /// x of the point, m.
+        x: f64,
+        /// y of the point, m.
+        y: f64,
+    },
+    /// the point lies within the grid's x range but below the ground (or floor).
+    #[error("point ({x}, {y}) lies below the ground, whose height there is {ground_y}")]
+    BelowGround {
+        /// x of the point, m.
+        x: f64,
+        /// y of the point, m.
+        y: f64,
+        /// height of the ground at x, m.
+        ground_y: f64,
+    },
+}
+
+/// Why a grid, a cell or a shape-function set could not be built.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum GridError {
+    /// a ground profile needs at least two points.
+    #[error("the ground profile has {count} point(s); at least 2 are needed")]
+    TooFewProfilePoints {
+        /// number of points given.
+        count: usize,
+    },
+    /// a profile point has a NaN or infinite coordinate.
+    #[error("ground profile point {index} = ({x}, {y}) is not finite")]
+    NonFiniteProfilePoint {
+        /// index of the point in the profile.
+        index: usize,
+        /// its x, m.
+        x: f64,
+        /// its y, m.
+        y: f64,
+    },
+    /// profile x must increase strictly from one point to the next.
+    #[error(
+        "ground profile point {index} has x = {x}, not greater than the previous point's {previous_x}"
+    )]
+    NonIncreasingProfile {
+        /// index of the offending point.
+        index: usize,
+        /// its x, m.
+        x: f64,
+        /// x of point `index - 1`, m.
+        previous_x: f64,
+    },
+    /// with [`KinkPolicy::Reject`](crate::KinkPolicy::Reject), every profile point must lie on a
+    /// column boundary x0 + k·l.
+    #[error(
+        "ground profile point {index} at x = {x} is not on a column boundary (nearest is {nearest_boundary_x}); move it or use KinkPolicy::Snap"
+    )]
+    KinkOffColumnBoundary {
+        /// index of the offending point.
+        index: usize,
+        /// its x, m.
+        x: f64,
+        /// the nearest column boundary, m.
+        nearest_boundary_x: f64,
+    },
+    /// after snapping to column boundaries, a point landed on the same boundary as its predecessor
+    /// (or on the first point): the profile has detail finer than one column.
+    #[error(
+        "ground profile point {index} at x = {x} snaps to the column boundary {boundary_x}, as the previous point does; use a smaller cell width or drop the point"
+    )]
+    SnappedPointsCoincide {
+        /// index of the offending point.
+        index: usize,
+        /// its x before snapping, m.
+        x: f64,
+        /// the column boundary both points snap to, m.
+        boundary_x: f64,
+    },
+    /// a length that must be positive and finite is not.
+    #[error("{what} = {value} must be positive and finite")]
+    NonPositiveSize {
+        /// which length ("cell width", "row height", "cell size dx", …).
+        what: &'static str,
+        /// the value given.
+        value: f64,
+    },
+    /// a coordinate that must be finite is not.
+    #[error("{what} = ({x}, {y}) is not finite")]
+    NonFinitePoint {
+        /// which point ("grid origin", "cell corner", …).
+        what: &'static str,
+        /// its x.
+        x: f64,
+        /// its y.
+        y: f64,
+    },
+    /// a grid needs at least one cell along each axis and at most [`MAX_CELLS_PER_AXIS`](crate::MAX_CELLS_PER_AXIS).
+    #[error("{what} = {count} is out of range (1 ..= {max})")]
+    CellCountOutOfRange {
+        /// which count ("rows", "columns", "cells along x", …).
+        what: &'static str,
+        /// the count asked for (as f64, because it may come from a ratio of lengths).
+        count: f64,
+        /// the largest count allowed.
+        max: usize,
+    },
+    /// a skewed cell whose isoparametric Jacobian is not positive everywhere in it.
+    #[error(
+        "cell of width {width} with left side height {left_height} and right side height {right_height} is degenerate: its Jacobian is not positive everywhere"
+    )]
+    DegenerateCell {
+        /// x2 − x1, m.
+        width: f64,
+        /// y3 − y1, m.
+        left_height: f64,
+        /// y4 − y2, m.
+        right_height: f64,
+    },
+    /// a profile segment so steep that its cells' height normal to the ground (h·cos θ) is not a
+    /// positive finite number.
+    #[error(
+        "ground profile segment from point {index} has slope {slope}: its cells would be degenerate (height normal to the ground {normal_height})"
+    )]
+    DegenerateSegment {
+        /// index of the segment's first point.
+        index: usize,
+        /// dy/dx of the segment.
+        slope: f64,
+        /// h / √(1 + slope²), m.
+        normal_height: f64,
+    },
+    /// uGIMP needs a particle half-size lp with 0 < lp ≤ cell/2 along each axis.
+    #[error("uGIMP particle half-size along {axis} = {value} must lie in (0, {max}] (half a cell)")]
+    InvalidParticleHalfSize {
+        /// "x" or "y".
+        axis: &'static str,
+        /// the value given, m.
+        value: f64,
+        /// half the cell size along that axis, m.
+        max: f64,
+    },
+}

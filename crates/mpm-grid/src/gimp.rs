@@ -1,0 +1,179 @@
+//! uGIMP shape functions (Bardenhagen & Kober 2004, "undeformed" particle domains) on the regular
+//! grid: 3 × 3 stencils, C¹ weights that remove the cell-crossing error of bilinear MPM.
+//!
+//! # Glossary
+//! - h: cell size along an axis (dx or dy), m; lp: the particle's half-size along that axis, m,
+//!   fixed (undeformed) for the whole run, 0 < lp ≤ h/2 (lp = h/(2·ppc) for ppc particles per
+//!   cell along the axis).
+//! - r = x − x_i: distance from node i, m. The 1D weight is the average of the hat function over
+//!   the particle's domain [x − lp, x + lp]:
+//!
+//! ```text
+//! S(r) = 1 − (r² + lp²)/(2 h lp)         |r| < lp
+//!        1 − |r|/h                        lp ≤ |r| ≤ h − lp
+//!        (h + lp − |r|)² / (4 h lp)       h − lp < |r| < h + lp
+//!        0                                otherwise
+//! ```
+//!
+//!   In 2D, S_i(x) = S(x − x_i)·S(y − y_i), ∇S_i = (S′(x − x_i)S(y − y_i), S(x − x_i)S′(y − y_i)).
+//! - stencil: with c the nearest node along each axis, nodes c−1, c, c+1 (support |r| < h + lp
+//!   ≤ 1.5h), in order k = 3·b + a for node (c_x − 1 + a, c_y − 1 + b).
+//! - boundaries: the point must lie inside the grid; its stencil may reach one ghost layer
+//!   outside (i = −1, nx + 1, j = −1, ny + 1). Ghost nodes are ordinary nodes: the weights keep
+//!   the partition of unity and linear completeness up to the walls, and the grid's
+//!   [`boundary_normals`](crate::RegularGrid::boundary_normals) reports the wall for the ghost
+//!   layer too, so boundary conditions hold it.
+//! - units SI (m).
+
+use crate::error::{GridError, LocateError};
+use crate::math::Vector;
+use crate::node::{BoundaryNormals, NodeId};
+use crate::regular::RegularGrid;
+use crate::stencil::{ShapeFunctions, Stencil};
+
+/// uGIMP shape functions on a regular grid: [`ShapeFunctions<9>`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gimp {
+    grid: RegularGrid,
+    half_particle: Vector,
+    /// lp / h per axis.
+    p: Vector,
+}
+
+impl Gimp {
+    /// uGIMP with particle half-size `half_particle` = (lp_x, lp_y), each in (0, cell/2].
+    pub fn new(grid: RegularGrid, half_particle: Vector) -> Result<Self, GridError> {
+        let cell = grid.cell_size();
+        for (axis, value, h) in [("x", half_particle.x, cell.x), ("y", half_particle.y, cell.y)] {
+            if !(value > 0.0 && value <= 0.5 * h) {
+                return Err(GridError::InvalidParticleHalfSize { axis, value, max: 0.5 * h });
+            }
+        }
+        Ok(Self { grid, half_particle, p: half_particle / cell })
+    }
+
+    /// uGIMP for `ppc` = [n_x, n_y] particles per cell along each axis: lp = cell/(2·n).
+    pub fn with_particles_per_cell(grid: RegularGrid, ppc: [usize; 2]) -> Result<Self, GridError> {
+        for (what, n) in
+            [("particles per cell along x", ppc[0]), ("particles per cell along y", ppc[1])]
+        {
+            if n == 0 || n > crate::MAX_CELLS_PER_AXIS {
+                return Err(GridError::CellCountOutOfRange {
+                    what,
+                    count: n as f64,
+                    max: crate::MAX_CELLS_PER_AXIS,
+                });
+            }
+        }
+        let lp = grid.cell_size() / Vector::new(2.0 * ppc[0] as f64, 2.0 * ppc[1] as f64);
+        Self::new(grid, lp)
+    }
+
+    /// the underlying grid.
+    pub fn grid(&self) -> &RegularGrid {
+        &self.grid
+    }
+
+    /// (lp_x, lp_y), m.
+    pub fn half_particle(&self) -> Vector {
+        self.half_particle
+    }
+}
+
+/// 1D uGIMP weight and its derivative with respect to r, both in cell units (h = 1, p = lp/h).
+#[inline(always)]
+fn gimp_1d(r: f64, p: f64) -> (f64, f64) {
+    let q = r.abs();
+    let sign = if r < 0.0 { -1.0 } else { 1.0 };
+    if q < p {
+        (1.0 - (r * r + p * p) / (2.0 * p), -r / p)
+    } else if q <= 1.0 - p {
+        (1.0 - q, -sign)
+    } else if q < 1.0 + p {
+        let e = 1.0 + p - q;
+        (e * e / (4.0 * p), -sign * e / (2.0 * p))
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// the nearest node c to u ≥ 0 and the three 1D (weight, derivative) pairs for c−1, c, c+1.
+#[inline(always)]
+fn gimp_axis(u: f64, p: f64) -> (i32, [(f64, f64); 3]) {
+    let c = (u + 0.5) as i32; // u ≥ 0: truncation is floor, so this rounds to nearest.
+    let d = u - f64::from(c);
+    (c, [gimp_1d(1.0 + d, p), gimp_1d(d, p), gimp_1d(d - 1.0, p)])
+}
+
+/// assembles a 3×3 tensor-product stencil from per-axis (weight, d/du) triples.
+#[inline(always)]
+pub(crate) fn tensor3(
+    cx: i32,
+    cy: i32,
+    wx: [(f64, f64); 3],
+    wy: [(f64, f64); 3],
+    inv_cell: Vector,
+) -> Stencil<9> {
+    let mut s =
+        Stencil { nodes: [NodeId::default(); 9], weights: [0.0; 9], gradients: [Vector::ZERO; 9] };
+    for (b, &(sy, dy)) in wy.iter().enumerate() {
+        for (a, &(sx, dx)) in wx.iter().enumerate() {
+            let k = 3 * b + a;
+            s.nodes[k] = NodeId::new(cx - 1 + a as i32, cy - 1 + b as i32);
+            s.weights[k] = sx * sy;
+            s.gradients[k] = Vector::new(dx * sy * inv_cell.x, sx * dy * inv_cell.y);
+        }
+    }
+    s
+}
+
+impl ShapeFunctions<9> for Gimp {
+    #[inline]
+    fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
+        let u = self.grid.units_of(x)?;
+        let (cx, wx) = gimp_axis(u.x, self.p.x);
+        let (cy, wy) = gimp_axis(u.y, self.p.y);
+        Ok(tensor3(cx, cy, wx, wy, self.grid.inverse_cell_size()))
+    }
+
+    fn node_position(&self, node: NodeId) -> Vector {
+        self.grid.node_position(node)
+    }
+
+    fn min_cell_size(&self) -> f64 {
+        self.grid.min_cell_size()
+    }
+
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        self.grid.boundary_normals(node)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// round-off allowance for O(1) piecewise polynomials.
+    const ROUND_OFF: f64 = 1e-14;
+
+    #[test]
+    fn one_d_weight_is_continuous_at_the_breakpoints() {
+        let p = 0.25;
+        for q in [p, 1.0 - p, 1.0 + p] {
+            let below = gimp_1d(q - 1e-12, p);
+            let above = gimp_1d(q + 1e-12, p);
+            assert!((below.0 - above.0).abs() < 1e-11, "weight jumps at {q}");
+            assert!((below.1 - above.1).abs() < 1e-10, "slope jumps at {q}");
+        }
+        // average of the hat over [−p, p]: 1 − p/2 at the node itself.
+        assert!((gimp_1d(0.0, p).0 - (1.0 - p / 2.0)).abs() < ROUND_OFF);
+    }
+
+    #[test]
+    fn half_size_beyond_half_a_cell_is_rejected() {
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.1), [4, 4]).unwrap();
+        let err = Gimp::new(grid, Vector::new(0.05, 0.06)).unwrap_err();
+        assert!(matches!(err, GridError::InvalidParticleHalfSize { axis: "y", .. }));
+        assert!(Gimp::with_particles_per_cell(grid, [2, 0]).is_err());
+    }
+}

@@ -1,0 +1,48 @@
+//! The fixed-size stencil of a point and the one interface over every grid + shape-function pair.
+
+use crate::error::LocateError;
+use crate::math::Vector;
+use crate::node::{BoundaryNormals, NodeId};
+
+/// Fixed-size stencil: the nodes whose support contains a point, with weights N_i(x) and
+/// gradients ∇N_i(x) (1/m).
+///
+/// Weights sum to one and reproduce linear fields (Σ N_i x_i = x, Σ x_i ⊗ ∇N_i = I). A node can
+/// appear with weight zero (a point on a cell edge, a point at a uGIMP support's rim); no node
+/// appears twice.
+#[derive(Clone, Copy, Debug)]
+pub struct Stencil<const N: usize> {
+    /// the nodes.
+    pub nodes: [NodeId; N],
+    /// N_i(x), dimensionless.
+    pub weights: [f64; N],
+    /// ∇N_i(x), 1/m.
+    pub gradients: [Vector; N],
+}
+
+impl<const N: usize> Stencil<N> {
+    /// (node, weight, gradient) triples in stencil order.
+    pub fn iter(&self) -> impl Iterator<Item = (NodeId, f64, Vector)> + '_ {
+        (0..N).map(move |k| (self.nodes[k], self.weights[k], self.gradients[k]))
+    }
+}
+
+/// One interface over every grid + shape-function pair (no allocation, no dyn).
+///
+/// `N` is the stencil size: 4 for bilinear, 9 for uGIMP and quadratic B-splines.
+pub trait ShapeFunctions<const N: usize>: Send + Sync {
+    /// nodes, weights and gradients at `x`; a typed error for a point off the grid.
+    fn stencil(&self, x: Vector) -> Result<Stencil<N>, LocateError>;
+
+    /// position of a node, m. Defined for every node id, including ghost nodes outside the grid
+    /// (extrapolating the grid's geometry), so it never fails.
+    fn node_position(&self, node: NodeId) -> Vector;
+
+    /// smallest cell dimension L used by the time-step (Courant) limit, m: for skewed cells the
+    /// smallest distance between opposite edges.
+    fn min_cell_size(&self) -> f64;
+
+    /// boundary planes a node lies on (ground/floor j ≤ 0, left wall i ≤ 0, right wall
+    /// i ≥ last column), as unit normals pointing into the material.
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals;
+}

@@ -1,0 +1,540 @@
+//! The terrain-following grid of isoparametric skewed rectangles (Abe, Johansson & Konagai 2005,
+//! §3(2), eqs 19–20): columns of width l over a piecewise-linear ground, rows at vertical spacing h.
+//!
+//! # Glossary
+//! - profile: the ground polyline y_g(x), points (X_k, Y_k), k = 0..=K, X strictly increasing;
+//!   segment k joins points k and k+1.
+//! - x0 = X_0: left end of the grid; l: column (cell) width, m; h: row spacing measured
+//!   vertically, m; `columns` cells along x, `rows` cells upwards.
+//! - node (i, j), i = 0..=columns, j = 0..=rows: at x = x0 + i·l, y = y_g(x) + j·h. Row j = 0
+//!   lies exactly on the ground.
+//! - cell (i, j): spans columns i..i+1 and rows j..j+1; its corners in the paper's numbering are
+//!   1 = node (i, j), 2 = (i+1, j), 3 = (i, j+1), 4 = (i+1, j+1).
+//! - ξ, η: natural coordinates (eqs 19–20); a = (1+ξ)/2, b = (1+η)/2 ∈ [0, 1].
+//! - s: slope dy/dx of the ground in a column; θ = atan s.
+//! - units SI (m); y up.
+//!
+//! # Kinks fall on column boundaries
+//! Each profile point must sit on a column boundary x0 + c·l so that the ground is straight
+//! across every column; then a cell's bottom and top edges are straight and parallel (a
+//! parallelogram with vertical sides, y3 − y1 = y4 − y2 = h), the general eq 20 map applies, and
+//! eq 20 reduces to the affine η = 2(y − y_g(x))/h − (2j + 1). [`KinkPolicy`] says what happens
+//! to a point off a boundary: `Snap` moves it horizontally to the nearest boundary (keeping its
+//! height), `Reject` is an error. Points within [`KINK_TOLERANCE`]·l of a boundary count as on it
+//! under both policies and are placed exactly on it. The grid keeps the snapped profile
+//! ([`TerrainGrid::profile`]); that is the ground the solver sees.
+//!
+//! # Locating a point (O(1), closed form)
+//! i = ⌊(x − x0)/l⌋, a = (x − x0)/l − i (eq 19); the column's ground height y_g(x) from its two
+//! ground nodes; t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j (eq 20). The profile segment of a column is
+//! found by a binary search over the K+1 profile points, so the grid's memory is O(K), not
+//! O(columns): a 10 km long grid costs what its profile costs.
+//!
+//! # Gradients
+//! The Jacobian of a parallelogram cell is constant: ∂a/∂x = 1/l, ∂a/∂y = 0, ∂b/∂x = −s/h,
+//! ∂b/∂y = 1/h; ∇N = (N_a/l − N_b·s/h, N_b/h) with N_a = ∂N/∂a, N_b = ∂N/∂b. This equals the
+//! general inverse-Jacobian route of [`SkewedCell::shape`](crate::SkewedCell::shape) (tested).
+//!
+//! # Ground normal at a kink
+//! A ground node inside a segment takes that segment's unit normal (pointing up, into the
+//! material). A node on a kink takes the normalised average of the two adjacent segments' unit
+//! normals (the bisector: for a 30° slope running into a flat runout, the normal leans 15° from
+//! vertical). Both segments stay available through [`TerrainGrid::ground_segments`] for a contact
+//! model that wants to treat the two faces separately.
+
+use serde::{Deserialize, Serialize};
+
+use crate::MAX_CELLS_PER_AXIS;
+use crate::error::{GridError, LocateError};
+use crate::math::Vector;
+use crate::node::{BoundaryNormals, CellCoords, NodeId};
+use crate::skewed_cell::SkewedCell;
+
+/// relative distance (in units of l) within which a profile point counts as lying on a column
+/// boundary: far above the round-off of (X_k − x0)/l for any sane input (~1e-15·K), far below any
+/// deliberate offset.
+pub const KINK_TOLERANCE: f64 = 1e-9;
+
+/// What to do with a profile point that does not fall on a column boundary x0 + c·l.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum KinkPolicy {
+    /// move the point horizontally to the nearest column boundary, keeping its height (error if
+    /// two points land on the same boundary).
+    #[default]
+    Snap,
+    /// return [`GridError::KinkOffColumnBoundary`] naming the point.
+    Reject,
+}
+
+/// Everything that defines a [`TerrainGrid`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TerrainGridSpec {
+    /// ground polyline, x strictly increasing, at least two points, m. The first point's x is
+    /// the grid's left end; the last point's (snapped) x its right end.
+    pub profile: Vec<Vector>,
+    /// column width l, m.
+    pub cell_width: f64,
+    /// row spacing h, measured vertically, m.
+    pub row_height: f64,
+    /// number of cell rows above the ground (node rows are 0..=rows).
+    pub rows: usize,
+    /// what to do with profile points off the column boundaries.
+    pub kink_policy: KinkPolicy,
+}
+
+/// One straight piece of the (snapped) ground profile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundSegment {
+    /// segment index k: it joins profile points k and k+1.
+    pub index: usize,
+    /// left end, m.
+    pub start: Vector,
+    /// right end, m.
+    pub end: Vector,
+    /// unit normal pointing up, into the material.
+    pub normal: Vector,
+}
+
+/// The ground segments on either side of a ground node.
+///
+/// `left` is the segment under column i−1, `right` the one under column i. Inside a segment both
+/// are that segment; at a kink they differ; at the grid's ends one is `None`; both are `None` for
+/// a column index outside 0..=columns.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AdjacentSegments {
+    /// segment under the column to the node's left.
+    pub left: Option<GroundSegment>,
+    /// segment under the column to the node's right.
+    pub right: Option<GroundSegment>,
+}
+
+/// Terrain-following grid of skewed rectangles over a piecewise-linear ground (eqs 19–20).
+///
+/// Invariants: columns ≥ 1, rows ≥ 1, every profile point on a column boundary, every cell
+/// non-degenerate. Memory is O(profile points), independent of the grid's extent.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainGrid {
+    x0: f64,
+    l: f64,
+    h: f64,
+    inv_l: f64,
+    inv_h: f64,
+    columns: usize,
+    rows: usize,
+    /// snapped profile, K+1 points.
+    points: Vec<Vector>,
+    /// column boundary index c_k of each profile point; c_0 = 0, c_K = columns.
+    point_column: Vec<u32>,
+    /// ground rise per column along segment k, (Y_{k+1} − Y_k)/(c_{k+1} − c_k), m; K entries.
+    rise: Vec<f64>,
+    /// unit normal of segment k; K entries.
+    normals: Vec<Vector>,
+    min_cell: f64,
+}
+
+/// where a point sits: column i, row j, fractions a = (1+ξ)/2, b = (1+η)/2, column slope s.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TerrainLocation {
+    pub i: usize,
+    pub j: usize,
+    pub a: f64,
+    pub b: f64,
+    pub slope: f64,
+}
+
+impl TerrainGrid {
+    /// builds the grid, validating the profile and sizes (see [`GridError`] for every failure,
+    /// each naming the offending point or value).
+    pub fn new(spec: TerrainGridSpec) -> Result<Self, GridError> {
+        let TerrainGridSpec { profile, cell_width: l, row_height: h, rows, kink_policy } = spec;
+        if profile.len() < 2 {
+            return Err(GridError::TooFewProfilePoints { count: profile.len() });
+        }
+        for (index, p) in profile.iter().enumerate() {
+            if !p.is_finite() {
+                return Err(GridError::NonFiniteProfilePoint { index, x: p.x, y: p.y });
+            }
+        }
+        for (index, w) in profile.windows(2).enumerate() {
+            if w[1].x <= w[0].x {
+                return Err(GridError::NonIncreasingProfile {
+                    index: index + 1,
+                    x: w[1].x,
+                    previous_x: w[0].x,
+                });
+            }
+        }
+        let positive = |v: f64| v > 0.0 && v.is_finite();
+        if !positive(l) {
+            return Err(GridError::NonPositiveSize { what: "cell width", value: l });
+        }
+        if !positive(h) {
+            return Err(GridError::NonPositiveSize { what: "row height", value: h });
+        }
+        if rows == 0 || rows > MAX_CELLS_PER_AXIS {
+            return Err(GridError::CellCountOutOfRange {
+                what: "rows",
+                count: rows as f64,
+                max: MAX_CELLS_PER_AXIS,
+            });
+        }
+        let x0 = profile[0].x;
+        let mut points = Vec::with_capacity(profile.len());
+        let mut point_column = Vec::with_capacity(profile.len());
+        points.push(profile[0]);
+        point_column.push(0u32);
+        for (index, p) in profile.iter().enumerate().skip(1) {
+            let u = (p.x - x0) / l;
+            let c = u.round();
+            if !(0.0..=MAX_CELLS_PER_AXIS as f64).contains(&c) {
+                return Err(GridError::CellCountOutOfRange {
+                    what: "columns",
+                    count: c,
+                    max: MAX_CELLS_PER_AXIS,
+                });
+            }
+            let boundary_x = x0 + c * l;
+            if kink_policy == KinkPolicy::Reject && (u - c).abs() > KINK_TOLERANCE {
+                return Err(GridError::KinkOffColumnBoundary {
+                    index,
+                    x: p.x,
+                    nearest_boundary_x: boundary_x,
+                });
+            }
+            let c = c as u32; // 0 ≤ c ≤ MAX_CELLS_PER_AXIS: exact
+            if c <= point_column[point_column.len() - 1] {
+                return Err(GridError::SnappedPointsCoincide { index, x: p.x, boundary_x });
+            }
+            points.push(Vector::new(boundary_x, p.y));
+            point_column.push(c);
+        }
+        let columns = point_column[point_column.len() - 1] as usize;
+        let y_extent = points.iter().map(|p| p.y.abs()).fold(0.0, f64::max);
+        let top = y_extent + h * rows as f64;
+        if !top.is_finite() {
+            return Err(GridError::NonPositiveSize { what: "row height × rows", value: top });
+        }
+        let mut rise = Vec::with_capacity(points.len() - 1);
+        let mut normals = Vec::with_capacity(points.len() - 1);
+        let mut min_cell = l;
+        for k in 0..points.len() - 1 {
+            let n_k = f64::from(point_column[k + 1] - point_column[k]);
+            let r = (points[k + 1].y - points[k].y) / n_k;
+            let slope = r / l;
+            let normal_height = h / (1.0 + slope * slope).sqrt();
+            if !(slope.is_finite() && positive(normal_height)) {
+                return Err(GridError::DegenerateSegment { index: k, slope, normal_height });
+            }
+            min_cell = min_cell.min(normal_height);
+            rise.push(r);
+            normals.push(Vector::new(-r, l).normalize());
+        }
+        Ok(Self {
+            x0,
+            l,
+            h,
+            inv_l: 1.0 / l,
+            inv_h: 1.0 / h,
+            columns,
+            rows,
+            points,
+            point_column,
+            rise,
+            normals,
+            min_cell,
+        })
+    }
+
+    /// the snapped ground profile: the ground the grid follows, m.
+    pub fn profile(&self) -> &[Vector] {
+        &self.points
+    }
+
+    /// column width l, m.
+    pub fn cell_width(&self) -> f64 {
+        self.l
+    }
+
+    /// row spacing h (vertical), m.
+    pub fn row_height(&self) -> f64 {
+        self.h
+    }
+
+    /// (1/l, 1/h), 1/m.
+    #[inline]
+    pub(crate) fn inverse_sizes(&self) -> (f64, f64) {
+        (self.inv_l, self.inv_h)
+    }
+
+    /// number of cell columns (node columns are 0..=columns).
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// number of cell rows (node rows are 0..=rows).
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// x range [x0, x0 + columns·l] covered by the grid, m.
+    pub fn x_range(&self) -> (f64, f64) {
+        (self.x0, self.x0 + self.columns as f64 * self.l)
+    }
+
+    /// smallest distance between opposite cell edges, m: min(l, h·cos θ_max).
+    pub fn min_cell_size(&self) -> f64 {
+        self.min_cell
+    }
+
+    /// index k of the last profile point at or left of column boundary `i` (0 ≤ i ≤ columns).
+    #[inline]
+    fn point_at_or_before(&self, i: usize) -> usize {
+        // c_0 = 0 ≤ i, so the partition point is ≥ 1.
+        self.point_column.partition_point(|&c| c as usize <= i) - 1
+    }
+
+    /// ground height of node column `i`, 0 ≤ i ≤ columns, from profile point k ≤ i.
+    #[inline]
+    fn ground_of_column_in(&self, k: usize, i: usize) -> f64 {
+        let offset = i - self.point_column[k] as usize;
+        if offset == 0 { self.points[k].y } else { self.points[k].y + self.rise[k] * offset as f64 }
+    }
+
+    /// ground height of node column `i`, m. Outside 0..=columns the end segments are extended.
+    pub fn node_ground_height(&self, i: i32) -> f64 {
+        let last = self.points.len() - 1;
+        if i < 0 {
+            self.points[0].y + self.rise[0] * f64::from(i)
+        } else if i as usize > self.columns {
+            self.points[last].y + self.rise[last - 1] * (i as usize - self.columns) as f64
+        } else {
+            let i = i as usize;
+            self.ground_of_column_in(self.point_at_or_before(i), i)
+        }
+    }
+
+    /// (column, a) for an x in range, a = (x − x_i)/l ∈ [0, 1]; `None` outside or non-finite.
+    #[inline]
+    fn column_of(&self, x: f64) -> Option<(usize, f64)> {
+        let u = (x - self.x0) * self.inv_l;
+        let n = self.columns as f64;
+        if !(u >= 0.0 && u <= n) {
+            return None;
+        }
+        // u ≥ 0, so truncation is floor; the right edge belongs to the last column.
+        let i = (u as usize).min(self.columns - 1);
+        Some((i, u - i as f64))
+    }
+
+    /// ground heights at both nodes of column i (0 ≤ i < columns), bitwise equal to
+    /// [`Self::node_ground_height`] of those nodes.
+    #[inline]
+    fn column_ground(&self, i: usize) -> (f64, f64) {
+        let k = self.point_at_or_before(i);
+        let ya = self.ground_of_column_in(k, i);
+        let yb = if i + 1 == self.point_column[k + 1] as usize {
+            self.points[k + 1].y
+        } else {
+            self.ground_of_column_in(k, i + 1)
+        };
+        (ya, yb)
+    }
+
+    /// height of the ground at `x`, m; `None` for a non-finite x or one outside the grid's
+    /// x range. This is the function [`Self::locate`] compares against for
+    /// [`LocateError::BelowGround`].
+    pub fn ground_height(&self, x: f64) -> Option<f64> {
+        let (i, a) = self.column_of(x)?;
+        let (ya, yb) = self.column_ground(i);
+        Some(ya + (yb - ya) * a)
+    }
+
+    #[inline]
+    pub(crate) fn locate_parts(&self, p: Vector) -> Result<TerrainLocation, LocateError> {
+        let Some((i, a)) = self.column_of(p.x) else {
+            return Err(if p.is_finite() {
+                LocateError::Outside { x: p.x, y: p.y }
+            } else {
+                LocateError::NonFinite { x: p.x, y: p.y }
+            });
+        };
+        let (ya, yb) = self.column_ground(i);
+        let ground_y = ya + (yb - ya) * a;
+        let t = (p.y - ground_y) * self.inv_h;
+        if !(0.0..=self.rows as f64).contains(&t) {
+            return Err(if !p.y.is_finite() {
+                LocateError::NonFinite { x: p.x, y: p.y }
+            } else if t < 0.0 {
+                LocateError::BelowGround { x: p.x, y: p.y, ground_y }
+            } else {
+                LocateError::Outside { x: p.x, y: p.y }
+            });
+        }
+        let j = (t as usize).min(self.rows - 1);
+        Ok(TerrainLocation { i, j, a, b: t - j as f64, slope: (yb - ya) * self.inv_l })
+    }
+
+    /// the cell holding `p` and its natural coordinates (eqs 19–20), O(1).
+    pub fn locate(&self, p: Vector) -> Result<CellCoords, LocateError> {
+        let loc = self.locate_parts(p)?;
+        Ok(CellCoords {
+            cell: NodeId::new(loc.i as i32, loc.j as i32),
+            xi: 2.0 * loc.a - 1.0,
+            eta: 2.0 * loc.b - 1.0,
+        })
+    }
+
+    /// the forward isoparametric map: the point at natural coordinates (ξ, η) of a cell, Σ N_a x_a
+    /// over the cell's four nodes.
+    pub fn position(&self, c: CellCoords) -> Vector {
+        let n = crate::skewed_cell::weights(c.xi, c.eta);
+        let NodeId { i, j } = c.cell;
+        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+        corners
+            .iter()
+            .zip(n)
+            .map(|(&(i, j), w)| w * self.node_position(NodeId::new(i, j)))
+            .fold(Vector::ZERO, |acc, v| acc + v)
+    }
+
+    /// position of node (i, j): x0 + i·l, ground + j·h, m. Ghost nodes beyond the ends extend the
+    /// first/last segment; rows below 0 or above `rows` continue the vertical spacing.
+    pub fn node_position(&self, node: NodeId) -> Vector {
+        Vector::new(
+            self.x0 + f64::from(node.i) * self.l,
+            self.node_ground_height(node.i) + f64::from(node.j) * self.h,
+        )
+    }
+
+    /// cell (i, j) as a general eq 19–20 cell, `None` if (i, j) is not a cell of this grid.
+    pub fn cell(&self, cell: NodeId) -> Option<SkewedCell> {
+        let (i, j) = (cell.i, cell.j);
+        if i < 0 || j < 0 || i as usize >= self.columns || j as usize >= self.rows {
+            return None;
+        }
+        let p1 = self.node_position(NodeId::new(i, j));
+        let p2 = self.node_position(NodeId::new(i + 1, j));
+        let p3 = self.node_position(NodeId::new(i, j + 1));
+        let p4 = self.node_position(NodeId::new(i + 1, j + 1));
+        SkewedCell::new(p1.x, p2.x, [p1.y, p2.y, p3.y, p4.y]).ok()
+    }
+
+    /// number of ground segments K (profile points − 1).
+    pub fn segment_count(&self) -> usize {
+        self.rise.len()
+    }
+
+    /// ground segment k, `None` if k ≥ K.
+    pub fn ground_segment(&self, k: usize) -> Option<GroundSegment> {
+        (k < self.rise.len()).then(|| GroundSegment {
+            index: k,
+            start: self.points[k],
+            end: self.points[k + 1],
+            normal: self.normals[k],
+        })
+    }
+
+    /// segment under column `c` (0 ≤ c < columns).
+    fn segment_of_column(&self, c: i64) -> Option<GroundSegment> {
+        if c < 0 || c as usize >= self.columns {
+            return None;
+        }
+        self.ground_segment(self.point_at_or_before(c as usize))
+    }
+
+    /// the ground segments on either side of ground node column `i`.
+    pub fn ground_segments(&self, i: i32) -> AdjacentSegments {
+        AdjacentSegments {
+            left: self.segment_of_column(i64::from(i) - 1),
+            right: self.segment_of_column(i64::from(i)),
+        }
+    }
+
+    /// unit normal of the ground at node column `i`, pointing into the material: the segment's
+    /// normal inside a segment, the normalised average of both segments' normals at a kink, the
+    /// end segment's normal beyond the grid's ends.
+    pub fn node_ground_normal(&self, i: i32) -> Vector {
+        match self.ground_segments(i) {
+            AdjacentSegments { left: Some(l), right: Some(r) } if l.index != r.index => {
+                // both normals have a positive y component, so the sum is never zero.
+                (l.normal + r.normal).normalize()
+            }
+            AdjacentSegments { left: Some(s), .. } | AdjacentSegments { right: Some(s), .. } => {
+                s.normal
+            }
+            AdjacentSegments { left: None, right: None } => {
+                if i < 0 {
+                    self.normals[0]
+                } else {
+                    self.normals[self.normals.len() - 1]
+                }
+            }
+        }
+    }
+
+    /// boundary planes of a node: ground for j ≤ 0, left wall (+x) for i ≤ 0, right wall (−x)
+    /// for i ≥ columns.
+    pub fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        BoundaryNormals {
+            ground: (node.j <= 0).then(|| self.node_ground_normal(node.i)),
+            left_wall: (node.i <= 0).then_some(Vector::X),
+            right_wall: (node.i as i64 >= self.columns as i64).then_some(Vector::NEG_X),
+        }
+    }
+
+    /// heap bytes held by the grid (O(profile points), independent of the extent).
+    pub fn heap_bytes(&self) -> usize {
+        self.points.capacity() * size_of::<Vector>()
+            + self.point_column.capacity() * size_of::<u32>()
+            + self.rise.capacity() * size_of::<f64>()
+            + self.normals.capacity() * size_of::<Vector>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// round-off allowance for coordinates of order 1–10 m after a few operations.
+    const ROUND_OFF: f64 = 1e-12;
+
+    fn slope_runout() -> TerrainGrid {
+        // 30° slope from x = 0 to 2 (5 columns of 0.4 m… the kink at x = 2 falls on a boundary),
+        // then a flat runout to x = 4.
+        let t = 30f64.to_radians().tan();
+        TerrainGrid::new(TerrainGridSpec {
+            profile: vec![Vector::new(0.0, 2.0 * t), Vector::new(2.0, 0.0), Vector::new(4.0, 0.0)],
+            cell_width: 0.4,
+            row_height: 0.25,
+            rows: 4,
+            kink_policy: KinkPolicy::Reject,
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn node_columns_and_rows_follow_the_ground() {
+        let g = slope_runout();
+        assert_eq!(g.columns(), 10);
+        let t = 30f64.to_radians().tan();
+        let p = g.node_position(NodeId::new(2, 3));
+        assert!((p.x - 0.8).abs() < ROUND_OFF);
+        assert!((p.y - ((2.0 - 0.8) * t + 0.75)).abs() < ROUND_OFF);
+        assert_eq!(g.node_position(NodeId::new(5, 0)).y, 0.0);
+    }
+
+    #[test]
+    fn locate_reports_cell_and_natural_coordinates() {
+        let g = slope_runout();
+        // centre of cell (6, 1): flat ground, x = 2.6, y = 0.375.
+        let c = g.locate(Vector::new(2.6, 0.375)).unwrap();
+        assert_eq!(c.cell, NodeId::new(6, 1));
+        assert!(c.xi.abs() < ROUND_OFF && c.eta.abs() < ROUND_OFF);
+    }
+
+    #[test]
+    fn min_cell_size_is_h_cos_theta_on_a_slope() {
+        let g = slope_runout();
+        assert!((g.min_cell_size() - 0.25 * 30f64.to_radians().cos()).abs() < ROUND_OFF);
+    }
+}
