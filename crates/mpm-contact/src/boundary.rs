@@ -66,10 +66,7 @@ impl Boundary {
             Friction::Coulomb { mu } => Friction::Coulomb { mu: mu + 0.0 },
             other => other,
         };
-        Ok(Self {
-            normal: normal / length,
-            friction,
-        })
+        Ok(Self { normal: normal / length, friction })
     }
 
     /// a Coulomb boundary with μ = tan(`angle_deg`), the friction angle in degrees, in [0°, 90°).
@@ -77,12 +74,7 @@ impl Boundary {
         if !(angle_deg.is_finite() && (0.0..90.0).contains(&angle_deg)) {
             return Err(ContactError::InvalidFrictionAngle { normal, angle_deg });
         }
-        Self::new(
-            normal,
-            Friction::Coulomb {
-                mu: angle_deg.to_radians().tan(),
-            },
-        )
+        Self::new(normal, Friction::Coulomb { mu: angle_deg.to_radians().tan() })
     }
 
     /// the unit normal n, pointing from the boundary into the material.

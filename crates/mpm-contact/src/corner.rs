@@ -73,10 +73,7 @@ fn next_pressed(
 
 /// the treatment of the module documentation, in the velocity domain.
 fn resolve_all(boundaries: &[Boundary], trial: Vector, law: Law) -> Verdict {
-    if let Some(b) = boundaries
-        .iter()
-        .find(|b| matches!(b.friction(), Friction::Fixed))
-    {
+    if let Some(b) = boundaries.iter().find(|b| matches!(b.friction(), Friction::Fixed)) {
         return Verdict::On(Face::resolve(b, trial, law));
     }
     let slack = FEASIBILITY_TOLERANCE * trial.length();
@@ -89,11 +86,7 @@ fn resolve_all(boundaries: &[Boundary], trial: Vector, law: Law) -> Verdict {
             return Verdict::On(face);
         }
     }
-    if last.is_some() {
-        Verdict::Stop
-    } else {
-        Verdict::Free
-    }
+    if last.is_some() { Verdict::Stop } else { Verdict::Free }
 }
 
 /// the step for a valid `dt` and a work mass ≥ 0.

@@ -113,6 +113,8 @@ pub(crate) struct Face {
     fixed: bool,
     /// pressed, or fixed.
     pub(crate) engaged: bool,
+    /// tangential impulse capacity per unit mass, μ|v\*_n| (∞ for rough and fixed), m/s.
+    capacity: f64,
     /// |v\*_t| within the friction capacity.
     stuck: bool,
     /// v^L·t.
@@ -134,11 +136,7 @@ impl Face {
         };
         let engaged = fixed || vn_trial < 0.0;
         // Tangential impulse capacity per unit mass; ∞·0 is avoided by testing μ first.
-        let capacity = if mu == f64::INFINITY {
-            f64::INFINITY
-        } else {
-            mu * -vn_trial
-        };
+        let capacity = if mu == f64::INFINITY { f64::INFINITY } else { mu * -vn_trial };
         let stuck = engaged && vt_trial.abs() <= capacity;
         let vt_end = if !engaged {
             vt_trial
@@ -148,17 +146,7 @@ impl Face {
             // |v*_t| > capacity here, so the difference is > 0 in floating point too: no reversal.
             vt_trial.signum() * (vt_trial.abs() - capacity)
         };
-        Self {
-            n,
-            t,
-            vn_trial,
-            vt_trial,
-            mu,
-            fixed,
-            engaged,
-            stuck,
-            vt_end,
-        }
+        Self { n, t, vn_trial, vt_trial, mu, fixed, engaged, capacity, stuck, vt_end }
     }
 
     /// v^L for an engaged face: the normal component is exactly zero.
@@ -192,7 +180,8 @@ impl Face {
             at - self.vt_trial.signum() * self.mu * reaction
         };
         let velocity = self.end_velocity();
-        let trial = v + a * dt;
+        // v^L − v* from its components, free of the cancellation of subtracting two nearly equal speeds.
+        let dvt = if self.stuck { -self.vt_trial } else { -self.vt_trial.signum() * self.capacity };
         ContactOutcome {
             acceleration: an_end * self.n + at_end * self.t,
             velocity,
@@ -200,7 +189,7 @@ impl Face {
             // |v^L_t| ≤ |v*_t| holds in floating point, and squaring is monotone, so this is ≥ 0.
             friction_work: 0.5 * mass * (self.vt_trial * self.vt_trial - self.vt_end * self.vt_end),
             normal_work: 0.5 * mass * self.vn_trial * self.vn_trial,
-            impulse: mass * (velocity - trial),
+            impulse: mass * (-self.vn_trial * self.n + dvt * self.t),
         }
     }
 }
@@ -212,11 +201,7 @@ pub(crate) fn valid_dt(dt: f64) -> bool {
 
 /// the mass used for work: a negative, NaN or infinite mass reports zero work instead of nonsense.
 pub(crate) fn work_mass(mass: f64) -> f64 {
-    if mass.is_finite() && mass > 0.0 {
-        mass
-    } else {
-        0.0
-    }
+    if mass.is_finite() && mass > 0.0 { mass } else { 0.0 }
 }
 
 /// the checks of the `try_apply` functions.
@@ -233,10 +218,7 @@ pub(crate) fn validate_step(
         return Err(ContactError::InvalidMass { mass });
     }
     if !(velocity.is_finite() && acceleration.is_finite()) {
-        return Err(ContactError::NonFiniteState {
-            velocity,
-            acceleration,
-        });
+        return Err(ContactError::NonFiniteState { velocity, acceleration });
     }
     Ok(())
 }
@@ -250,7 +232,13 @@ impl Boundary {
     /// non-finite `dt` is not a step and leaves the node untouched (use [`Boundary::try_apply`] to have
     /// it reported); a negative or non-finite `mass` reports zero work; non-finite velocity or
     /// acceleration propagate into the outcome.
-    pub fn apply(&self, mass: f64, velocity: Vector, acceleration: Vector, dt: f64) -> ContactOutcome {
+    pub fn apply(
+        &self,
+        mass: f64,
+        velocity: Vector,
+        acceleration: Vector,
+        dt: f64,
+    ) -> ContactOutcome {
         if !valid_dt(dt) {
             return ContactOutcome::untouched(velocity, acceleration, dt);
         }
@@ -285,10 +273,6 @@ impl Boundary {
     /// [`Boundary::apply`], and applying it again to the remapped velocity would count it twice.
     pub fn constrain_velocity(&self, velocity: Vector) -> Vector {
         let face = Face::resolve(self, velocity, Law::VelocityOnly);
-        if face.engaged {
-            face.end_velocity()
-        } else {
-            velocity
-        }
+        if face.engaged { face.end_velocity() } else { velocity }
     }
 }
