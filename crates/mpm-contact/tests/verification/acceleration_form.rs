@@ -51,7 +51,7 @@ fn impulse_form_reproduces_the_acceleration_form_on_the_analytic_cases() {
     }
     // The same on rotated copies of the whole problem (gravity rotated too).
     for k in 0..12 {
-        let r = unit(k as f64 * 0.5236 + 0.1);
+        let r = unit(k as f64 * std::f64::consts::FRAC_PI_6 + 0.1);
         for (n, mu, v) in cases {
             let (da, dv) = compare(r.rotate(n), mu, r.rotate(v), r.rotate(gravity()));
             assert!(
