@@ -1,0 +1,516 @@
+//! Drucker-Prager plasticity with non-associated flow and Prager mixed hardening, the paper's
+//! eqs 23–25, integrated by a closed-form return mapping (cone or apex) with its consistent
+//! tangent.
+//!
+//! # Glossary
+//! - `σ` stress, `s = dev σ`, `I1 = tr σ` (Pa); `K`, `G` bulk and shear moduli (Pa), `C` the
+//!   elastic stiffness (eq 10).
+//! - `β` deviatoric back stress (Pa); `ξ = s − β` the relative deviator; `q = √J2(ξ) = ‖ξ‖/√2`;
+//!   `n̂ = ξ/‖ξ‖` its unit direction (so `∂q/∂σ = n̂/√2`).
+//! - `k` cone size (Pa), `k0` its initial value; `α`, `αg` friction and dilatancy coefficients.
+//! - `H` plastic modulus (Pa), `M ∈ [0, 1]` mixing parameter (1 isotropic, 0 kinematic).
+//! - `Δλ` plastic multiplier, `ε̄ᵖ` equivalent plastic (shear) strain.
+//! - Shorthands: `D = 9Kααg + G + H`, `B = G + (1 − M)H`.
+//!
+//! Tension positive (so compression makes `I1 < 0` and raises the strength `k − α I1`), SI units,
+//! tensor shear strain components (see [`crate::tensor`]).
+//!
+//! # Model (eqs 23–25)
+//! ```text
+//! f = α I1 + q − k(ε̄ᵖ)                         yield function            (23)
+//! g = αg I1 + q                                 plastic potential         (24)
+//! Δεᵖ = Δλ ∂g/∂σ = Δλ (αg I + n̂/√2)             non-associated flow rule  (25)
+//! ```
+//! `ε̄ᵖ` is the accumulated equivalent plastic shear strain `Σ √(2 Δeᵖ : Δeᵖ)` (`eᵖ = dev εᵖ`);
+//! on the cone this increment equals `Δλ`, so `H = dk/dε̄ᵖ` is the plastic modulus in `√J2` units
+//! and `q Δλ = ξ : Δεᵖ` (the multiplier is work-conjugate to `√J2`).
+//! Prager mixed hardening: `k ← k + M H Δλ` and `β ← β + √2 (1 − M) H Δλ n̂`, i.e. `β` moves
+//! along the return direction by `(1 − M) H Δλ` in `√J2` units.
+//!
+//! The paper's plane-strain parameters follow from Mohr-Coulomb `(c, φ, ψ)` by [`ConeMatch`].
+//!
+//! # Cone return (closed form)
+//! With the elastic trial `σᵗʳ = σ + C : Δε`, `ξᵗʳ = dev σᵗʳ − β`, `qᵗʳ = √J2(ξᵗʳ)`,
+//! `fᵗʳ = α I1ᵗʳ + qᵗʳ − k > 0`, the return `σ = σᵗʳ − Δλ C : ∂g/∂σ` gives
+//! ```text
+//! I1 = I1ᵗʳ − 9K αg Δλ,   ξ = ξᵗʳ − √2 (G + (1 − M)H) Δλ n̂   (n̂ unchanged: radial return)
+//! f  = α I1ᵗʳ − 9Kααg Δλ + qᵗʳ − (G + (1 − M)H) Δλ − k − MH Δλ = fᵗʳ − D Δλ
+//! ```
+//! hence `Δλ = fᵗʳ / (9Kααg + G + H)`. The returned state is assembled from its invariants with
+//! `q := k_{n+1} − α I1_{n+1}`, so `f = 0` holds to rounding of the *returned* magnitudes, not of
+//! the (possibly much larger) trial ones.
+//!
+//! # Apex return
+//! The cone return is valid while the returned `q = qᵗʳ − B Δλ` is non-negative. Otherwise it
+//! overshoots the tip and the stress goes to the apex of the hardened cone: deviator `= β`, on
+//! the yield surface. At the apex the deviatoric plastic strain is whatever removes `ξᵗʳ`; the
+//! multiplier is defined, as on the cone, by the equivalent plastic shear strain it produces:
+//! ```text
+//! s_{n+1} = β_{n+1} = β + (1 − M)H Δλ √2 n̂,   s_{n+1} = sᵗʳ − 2G Δeᵖ,   √2 ‖Δeᵖ‖ = Δλ
+//!   ⇒ ξᵗʳ = √2 (G + (1 − M)H) Δλ n̂   ⇒   Δλ = qᵗʳ / B
+//! k_{n+1} = k + MH Δλ,   I1_{n+1} = k_{n+1} / α,   Δεᵖ = C⁻¹ : (σᵗʳ − σ_{n+1})
+//! ```
+//! The textbook apex instead takes `Δλ` from the volumetric flow rule,
+//! `Δλ = (α I1ᵗʳ − k)/(9Kααg + MH)`, which is unbounded as `ψ → 0` with `MH = 0`: exactly the
+//! cohesionless, non-dilatant sand of the paper whose particles separate all the time. Here no
+//! division by `αg` occurs: the apex costs one square root and is finite for `ψ = 0`, `c = 0` and
+//! pure tension (`σ → β`, which is zero stress for a virgin cohesionless point). Both definitions
+//! give the same stress whenever `MH = 0` and agree with the cone return on the cone/apex
+//! boundary (there `qᵗʳ/B = fᵗʳ/D`), so the update is continuous. The volumetric plastic strain
+//! at the apex, `(I1ᵗʳ − I1_{n+1})/(3K)`, is at least the flow rule's `3αg Δλ` (the cone
+//! overshoots exactly when `α I1ᵗʳ − k > (9Kααg + MH) qᵗʳ/B`); the excess is opening of the
+//! granular skeleton, which neither hardens nor counts in `ε̄ᵖ`.
+//! The plastic work is `σ_{n+1} : Δεᵖ = I1_{n+1} (I1ᵗʳ − I1_{n+1})/(9K) + β_{n+1} : ξᵗʳ/(2B)`.
+//!
+//! # Well-posedness
+//! The constructor requires `D > 0` (unique cone multiplier) and `B > 0` (unique apex multiplier,
+//! and the overshoot test is meaningful); softening `H < 0` is allowed within these bounds. With
+//! `φ = 0` there is no apex; a cone softened to `k < 0` is then empty and the update returns
+//! [`ConstitutiveError::EmptyElasticDomain`].
+
+use glam::DMat3;
+use serde::{Deserialize, Serialize};
+
+use crate::elastic::LinearElastic;
+use crate::error::ConstitutiveError;
+use crate::model::{ConstitutiveModel, Surface, TangentModel, UpdateReport, check_finite};
+use crate::tensor::{SymTensor, Tangent, deviatoric_projector, dyad, tangent_axpby};
+
+/// How the cone is fitted to the Mohr-Coulomb pyramid of `(c, φ)` (and `ψ` for `αg`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ConeMatch {
+    /// same collapse load in plane strain (the paper's choice):
+    /// `α = tanφ/√(9 + 12 tan²φ)`, `k0 = 3c/√(9 + 12 tan²φ)`.
+    #[default]
+    PlaneStrain,
+    /// through the triaxial-extension corners of the pyramid (the smaller of the two triaxial
+    /// cones): `α = 2 sinφ/(√3 (3 + sinφ))`, `k0 = 6c cosφ/(√3 (3 + sinφ))`.
+    Inner,
+    /// through the triaxial-compression corners (circumscribes the pyramid):
+    /// `α = 2 sinφ/(√3 (3 − sinφ))`, `k0 = 6c cosφ/(√3 (3 − sinφ))`.
+    Outer,
+}
+
+impl ConeMatch {
+    /// `(α, k0)` of the cone matched to cohesion `c` (Pa) and friction angle `φ` (degrees).
+    /// Used with `(0, ψ)` it gives `(αg, 0)`.
+    pub fn coefficients(self, friction_angle_deg: f64, cohesion: f64) -> (f64, f64) {
+        let phi = friction_angle_deg.to_radians();
+        match self {
+            Self::PlaneStrain => {
+                let t = phi.tan();
+                let root = (9.0 + 12.0 * t * t).sqrt();
+                (t / root, 3.0 * cohesion / root)
+            }
+            Self::Inner | Self::Outer => {
+                let (sin, cos) = phi.sin_cos();
+                let den = 3.0f64.sqrt() * if self == Self::Inner { 3.0 + sin } else { 3.0 - sin };
+                (2.0 * sin / den, 6.0 * cohesion * cos / den)
+            }
+        }
+    }
+}
+
+/// Material parameters of [`DruckerPrager`] (SI units, angles in degrees).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DruckerPragerParams {
+    /// Young's modulus `E > 0` (Pa).
+    pub young: f64,
+    /// Poisson's ratio `−1 < ν < 0.5`.
+    pub poisson: f64,
+    /// Mohr-Coulomb cohesion `c ≥ 0` (Pa).
+    pub cohesion: f64,
+    /// friction angle `0 ≤ φ < 90` (degrees).
+    pub friction_angle_deg: f64,
+    /// dilatancy angle `0 ≤ ψ ≤ φ` (degrees); `ψ = φ` is associated flow.
+    pub dilatancy_angle_deg: f64,
+    /// plastic modulus `H = dk/dε̄ᵖ` (Pa); negative values (softening) only while well posed.
+    pub hardening_modulus: f64,
+    /// M ∈ [0,1]: 1 isotropic, 0 kinematic
+    pub mixing: f64,
+    /// how `(α, k0, αg)` are matched to `(c, φ, ψ)`.
+    pub cone_match: ConeMatch,
+}
+
+impl DruckerPragerParams {
+    /// the paper's dry sand (§7, table 2): `E = 2e6 Pa`, `ν = 0.3`, `c = 10 Pa`, `φ = 40°`,
+    /// `ψ = 0`, `H = 0`, `M = 0.8`, plane-strain match.
+    pub const ABE2005_DRY_SAND: Self = Self {
+        young: 2.0e6,
+        poisson: 0.3,
+        cohesion: 10.0,
+        friction_angle_deg: 40.0,
+        dilatancy_angle_deg: 0.0,
+        hardening_modulus: 0.0,
+        mixing: 0.8,
+        cone_match: ConeMatch::PlaneStrain,
+    };
+}
+
+/// Internal variables of a [`DruckerPrager`] material point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DpState {
+    /// deviatoric back stress β
+    pub back_stress: SymTensor,
+    /// current cone size k (Pa)
+    pub k: f64,
+    /// equivalent plastic strain ε̄ᵖ
+    pub eps_p_bar: f64,
+}
+
+/// Drucker-Prager with non-associated flow and Prager mixed hardening (eqs 23–25), see the module
+/// docs for the return mapping.
+#[derive(Clone, Debug)]
+pub struct DruckerPrager {
+    params: DruckerPragerParams,
+    elastic: LinearElastic,
+    alpha: f64,
+    alpha_g: f64,
+    k0: f64,
+    /// `2G`.
+    two_g: f64,
+    /// `λ` (Lamé).
+    lame: f64,
+    /// `9K αg`: drop of `I1` per unit `Δλ`.
+    nine_k_alpha_g: f64,
+    /// `M H`: growth of `k` per unit `Δλ`.
+    iso_h: f64,
+    /// `(1 − M) H`: travel of `β` per unit `Δλ` in `√J2` units.
+    kin_h: f64,
+    /// `1 / (9Kααg + G + H)`.
+    inv_d: f64,
+    /// `1 / (G + (1 − M)H)`.
+    inv_b: f64,
+}
+
+const SQRT_2: f64 = std::f64::consts::SQRT_2;
+const FRAC_1_SQRT_2: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// quantities of the elastic trial state shared by the update and the tangent.
+struct Trial {
+    sigma: SymTensor,
+    i1: f64,
+    /// `ξᵗʳ = dev σᵗʳ − dev β`.
+    xi: SymTensor,
+    /// `qᵗʳ = √J2(ξᵗʳ)`.
+    q: f64,
+    /// `dev β`.
+    beta: SymTensor,
+    f: f64,
+}
+
+/// outcome of the return mapping, before it is written back.
+enum Return {
+    Elastic,
+    Cone { dl: f64, i1: f64, q: f64, k: f64 },
+    Apex { dl: f64, i1: f64, k: f64 },
+}
+
+impl DruckerPrager {
+    /// validates `p` and precomputes the cone coefficients.
+    ///
+    /// Admissible: `E > 0`, `−1 < ν < 0.5`, `c ≥ 0`, `0 ≤ φ < 90°`, `0 ≤ ψ ≤ φ`, `M ∈ [0, 1]`,
+    /// finite `H` with `9Kααg + G + H > 0` and `G + (1 − M)H > 0`.
+    pub fn new(p: DruckerPragerParams) -> Result<Self, ConstitutiveError> {
+        let elastic = LinearElastic::from_young_poisson(p.young, p.poisson)?;
+        let invalid =
+            |name, value, range| ConstitutiveError::InvalidParameter { name, value, range };
+        if !(p.cohesion.is_finite() && p.cohesion >= 0.0) {
+            return Err(invalid("cohesion", p.cohesion, "0 <= cohesion < inf (Pa)"));
+        }
+        if !(p.friction_angle_deg >= 0.0 && p.friction_angle_deg < 90.0) {
+            return Err(invalid("friction_angle_deg", p.friction_angle_deg, "0 <= phi < 90 (deg)"));
+        }
+        if !(p.dilatancy_angle_deg >= 0.0 && p.dilatancy_angle_deg <= p.friction_angle_deg) {
+            return Err(invalid(
+                "dilatancy_angle_deg",
+                p.dilatancy_angle_deg,
+                "0 <= psi <= friction_angle_deg (deg)",
+            ));
+        }
+        if !(p.mixing >= 0.0 && p.mixing <= 1.0) {
+            return Err(invalid("mixing", p.mixing, "0 <= mixing <= 1"));
+        }
+        if !p.hardening_modulus.is_finite() {
+            return Err(invalid(
+                "hardening_modulus",
+                p.hardening_modulus,
+                "finite, with 9K alpha alpha_g + G + H > 0 and G + (1 - M) H > 0 (Pa)",
+            ));
+        }
+        let (alpha, k0) = p.cone_match.coefficients(p.friction_angle_deg, p.cohesion);
+        let (alpha_g, _) = p.cone_match.coefficients(p.dilatancy_angle_deg, 0.0);
+        let (bulk, shear) = (elastic.bulk_modulus(), elastic.shear_modulus());
+        let h = p.hardening_modulus;
+        let nine_k_aag = 9.0 * bulk * alpha * alpha_g;
+        let d = nine_k_aag + shear + h;
+        // every input is finite here, so `d` and `b` are not NaN.
+        if d <= 0.0 {
+            return Err(ConstitutiveError::IllPosedSoftening {
+                hardening_modulus: h,
+                lower_bound: -(nine_k_aag + shear),
+                condition: "cone return needs 9K alpha alpha_g + G + H > 0",
+            });
+        }
+        let kin_h = (1.0 - p.mixing) * h;
+        let b = shear + kin_h;
+        if b <= 0.0 {
+            return Err(ConstitutiveError::IllPosedSoftening {
+                hardening_modulus: h,
+                lower_bound: -shear / (1.0 - p.mixing),
+                condition: "apex return needs G + (1 - M) H > 0",
+            });
+        }
+        Ok(Self {
+            params: p,
+            elastic,
+            alpha,
+            alpha_g,
+            k0,
+            two_g: 2.0 * shear,
+            lame: elastic.lame_lambda(),
+            nine_k_alpha_g: 9.0 * bulk * alpha_g,
+            iso_h: p.mixing * h,
+            kin_h,
+            inv_d: 1.0 / d,
+            inv_b: 1.0 / b,
+        })
+    }
+
+    /// the validated parameters.
+    pub fn params(&self) -> &DruckerPragerParams {
+        &self.params
+    }
+
+    /// friction coefficient `α` of eq 23.
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// dilatancy coefficient `αg` of eq 24.
+    pub fn alpha_g(&self) -> f64 {
+        self.alpha_g
+    }
+
+    /// initial cone size `k0` (Pa).
+    pub fn k0(&self) -> f64 {
+        self.k0
+    }
+
+    /// `9Kααg + G + H` (Pa), the denominator of the cone return.
+    pub fn cone_denominator(&self) -> f64 {
+        1.0 / self.inv_d
+    }
+
+    /// eq 23: `f = α I1 + √J2(σ − β) − k` (Pa); `f ≤ 0` is admissible.
+    pub fn yield_function(&self, sigma: &SymTensor, state: &DpState) -> f64 {
+        self.alpha * sigma.trace() + (*sigma - state.back_stress).j2().sqrt() - state.k
+    }
+
+    /// the plastic potential's gradient `∂g/∂σ = αg I + n̂/√2` at `(sigma, state)`; at the apex
+    /// (`ξ = 0`) the deviatoric part is taken as zero.
+    pub fn flow_direction(&self, sigma: &SymTensor, state: &DpState) -> SymTensor {
+        let xi = (*sigma - state.back_stress).deviator();
+        let norm = xi.norm();
+        let dev = if norm > 0.0 { xi * (FRAC_1_SQRT_2 / norm) } else { SymTensor::ZERO };
+        SymTensor::IDENTITY * self.alpha_g + dev
+    }
+
+    /// algorithmic (consistent) tangent `dσ_{n+1}/dΔε` of [`update`](ConstitutiveModel::update)
+    /// for the start state (`sigma`, `state`) and increment `d_eps`.
+    ///
+    /// The matrix is in the [`SymTensor`] storage order `[xx, yy, zz, xy, yz, zx]` and acts on
+    /// **tensor** strain components: `dσ[i] = Σ_j T[i][j] dε[j]` with `dε[3] = dε_xy = dγ_xy/2`
+    /// (so the elastic entry is `T[3][3] = 2G`). Multiply the shear columns by ½ for a matrix
+    /// acting on engineering shear strains.
+    ///
+    /// Cone: `C − (C:∂g/∂σ) ⊗ (C:∂f/∂σ)/D − (2G² Δλ/qᵗʳ)(P_dev − n̂ ⊗ n̂)`.
+    /// Apex: `(√2 G MH/(3αB)) I ⊗ n̂ + (2G (1 − M)H/B) P_dev`.
+    pub fn consistent_tangent(
+        &self,
+        sigma: &SymTensor,
+        state: &DpState,
+        d_eps: &SymTensor,
+    ) -> Result<Tangent, ConstitutiveError> {
+        self.check_inputs(sigma, state, d_eps)?;
+        let trial = self.trial(sigma, state, d_eps);
+        let g = self.elastic.shear_modulus();
+        let bulk = self.elastic.bulk_modulus();
+        let n_hat =
+            if trial.q > 0.0 { trial.xi * (FRAC_1_SQRT_2 / trial.q) } else { SymTensor::ZERO };
+        let p_dev = deviatoric_projector();
+        match self.return_map(&trial, state)? {
+            Return::Elastic => Ok(self.elastic.stiffness_matrix()),
+            Return::Cone { dl, .. } => {
+                let c_dg = SymTensor::IDENTITY * (3.0 * bulk * self.alpha_g) + n_hat * (SQRT_2 * g);
+                let c_df = SymTensor::IDENTITY * (3.0 * bulk * self.alpha) + n_hat * (SQRT_2 * g);
+                let t = tangent_axpby(
+                    1.0,
+                    &self.elastic.stiffness_matrix(),
+                    -self.inv_d,
+                    &dyad(&c_dg, &c_df),
+                );
+                let radial = tangent_axpby(1.0, &p_dev, -1.0, &dyad(&n_hat, &n_hat));
+                Ok(tangent_axpby(1.0, &t, -2.0 * g * g * dl / trial.q, &radial))
+            }
+            Return::Apex { .. } => {
+                let vol = SQRT_2 * g * self.iso_h * self.inv_b / (3.0 * self.alpha);
+                let t = dyad(&SymTensor::IDENTITY, &n_hat);
+                Ok(tangent_axpby(vol, &t, self.two_g * self.kin_h * self.inv_b, &p_dev))
+            }
+        }
+    }
+
+    fn check_inputs(
+        &self,
+        sigma: &SymTensor,
+        state: &DpState,
+        d_eps: &SymTensor,
+    ) -> Result<(), ConstitutiveError> {
+        check_finite(sigma, d_eps)?;
+        let b = &state.back_stress;
+        if b.is_finite() && state.k.is_finite() && state.eps_p_bar.is_finite() {
+            return Ok(());
+        }
+        let name = if !state.k.is_finite() {
+            ("k", state.k)
+        } else if !state.eps_p_bar.is_finite() {
+            ("eps_p_bar", state.eps_p_bar)
+        } else {
+            let (c, v) = b.first_non_finite().unwrap_or(("xx", f64::NAN));
+            let name = match c {
+                "xx" => "back_stress.xx",
+                "yy" => "back_stress.yy",
+                "zz" => "back_stress.zz",
+                "xy" => "back_stress.xy",
+                "yz" => "back_stress.yz",
+                _ => "back_stress.zx",
+            };
+            (name, v)
+        };
+        Err(ConstitutiveError::NonFiniteState { name: name.0, value: name.1 })
+    }
+
+    #[inline]
+    fn trial(&self, sigma: &SymTensor, state: &DpState, d_eps: &SymTensor) -> Trial {
+        // eq 10: σᵗʳ = σ + λ tr(Δε) I + 2G Δε.
+        let lt = self.lame * d_eps.trace();
+        let tg = self.two_g;
+        let st = SymTensor::new(
+            sigma.xx + lt + tg * d_eps.xx,
+            sigma.yy + lt + tg * d_eps.yy,
+            sigma.zz + lt + tg * d_eps.zz,
+            sigma.xy + tg * d_eps.xy,
+            sigma.yz + tg * d_eps.yz,
+            sigma.zx + tg * d_eps.zx,
+        );
+        let beta = state.back_stress.deviator();
+        let i1 = st.trace();
+        let xi = st.deviator() - beta;
+        let q = (0.5 * xi.ddot(&xi)).sqrt();
+        let f = self.alpha * i1 + q - state.k;
+        Trial { sigma: st, i1, xi, q, beta, f }
+    }
+
+    #[inline]
+    fn return_map(&self, t: &Trial, state: &DpState) -> Result<Return, ConstitutiveError> {
+        // `!(f > 0)` would also catch NaN, which the input checks exclude.
+        if t.f <= 0.0 {
+            return Ok(Return::Elastic);
+        }
+        // cone: Δλ = fᵗʳ / (9Kααg + G + H); q from the consistency condition.
+        let dl = t.f * self.inv_d;
+        let k = state.k + self.iso_h * dl;
+        let i1 = t.i1 - self.nine_k_alpha_g * dl;
+        let q = k - self.alpha * i1;
+        if t.q > 0.0 && q >= 0.0 {
+            return Ok(Return::Cone { dl, i1, q, k });
+        }
+        // apex: Δλ = qᵗʳ / (G + (1 − M)H), I1 = k_{n+1}/α.
+        let dl = t.q * self.inv_b;
+        let k = state.k + self.iso_h * dl;
+        if self.alpha > 0.0 {
+            Ok(Return::Apex { dl, i1: k / self.alpha, k })
+        } else {
+            Err(ConstitutiveError::EmptyElasticDomain { k })
+        }
+    }
+}
+
+impl ConstitutiveModel for DruckerPrager {
+    type State = DpState;
+    const IS_PLASTIC: bool = true;
+
+    fn initial_state(&self) -> DpState {
+        DpState { back_stress: SymTensor::ZERO, k: self.k0, eps_p_bar: 0.0 }
+    }
+
+    fn elasticity(&self) -> &LinearElastic {
+        &self.elastic
+    }
+
+    fn update(
+        &self,
+        sigma: &mut SymTensor,
+        state: &mut DpState,
+        d_eps: &SymTensor,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        self.check_inputs(sigma, state, d_eps)?;
+        let t = self.trial(sigma, state, d_eps);
+        let (new_sigma, new_state, report) = match self.return_map(&t, state)? {
+            Return::Elastic => (t.sigma, *state, UpdateReport::ELASTIC),
+            Return::Cone { dl, i1, q, k } => {
+                // ‖ξᵗʳ‖ = √2 qᵗʳ.
+                let n_hat = t.xi * (FRAC_1_SQRT_2 / t.q);
+                let beta = t.beta + n_hat * (SQRT_2 * self.kin_h * dl);
+                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta + n_hat * (SQRT_2 * q);
+                // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : n̂/√2.
+                let work = dl * (self.alpha_g * i1 + q + FRAC_1_SQRT_2 * beta.ddot(&n_hat));
+                let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
+                let rep =
+                    UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
+                (s, st, rep)
+            }
+            Return::Apex { dl, i1, k } => {
+                // β_{n+1} = β + (1 − M)H Δλ √2 n̂ = β + ((1 − M)H/B) ξᵗʳ.
+                let beta = t.beta + t.xi * (self.kin_h * self.inv_b);
+                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta;
+                // σ : C⁻¹ : (σᵗʳ − σ) with σᵗʳ − σ = (I1ᵗʳ − I1)/3 I + (G/B) ξᵗʳ.
+                let bulk = self.elastic.bulk_modulus();
+                let work = i1 * (t.i1 - i1) / (9.0 * bulk) + 0.5 * self.inv_b * beta.ddot(&t.xi);
+                let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
+                let rep =
+                    UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };
+                (s, st, rep)
+            }
+        };
+        if !new_sigma.is_finite() {
+            // finite inputs so large that the trial overflowed: refuse, leave inputs untouched.
+            let (component, value) = new_sigma.first_non_finite().unwrap_or(("xx", f64::NAN));
+            return Err(ConstitutiveError::NonFiniteStress { component, value });
+        }
+        *sigma = new_sigma;
+        *state = new_state;
+        Ok(report)
+    }
+
+    fn rotate_state(&self, state: &mut DpState, r: &DMat3) {
+        state.back_stress = state.back_stress.rotated(r);
+    }
+
+    fn equivalent_plastic_strain(&self, state: &DpState) -> f64 {
+        state.eps_p_bar
+    }
+}
+
+impl TangentModel for DruckerPrager {
+    fn consistent_tangent(
+        &self,
+        sigma: &SymTensor,
+        state: &DpState,
+        d_eps: &SymTensor,
+    ) -> Result<Tangent, ConstitutiveError> {
+        // the inherent method (inherent methods take precedence over trait methods).
+        DruckerPrager::consistent_tangent(self, sigma, state, d_eps)
+    }
+}

@@ -1,0 +1,407 @@
+//! Element-test drivers (the paper's §6(3)): a single material point driven along a mixed
+//! stress/strain path, solved by Newton iteration on the consistent tangent.
+//!
+//! # Glossary
+//! - `ε` total small strain since the start of the test (tensor components; CSV output also gives
+//!   engineering shear `γ = 2ε`), `σ` stress (Pa), `ε̄ᵖ` equivalent plastic strain.
+//! - A [`MixedControl`] marks each of the six components `[xx, yy, zz, xy, yz, zx]` as strain
+//!   controlled (its strain increment per step is prescribed) or stress controlled (its stress
+//!   increment per step is prescribed; the strain component is solved for).
+//!
+//! Tension positive (compression tests use negative strains), SI units.
+//!
+//! # Newton iteration
+//! In each step the unknown strain increments `x` (the stress-controlled components) solve
+//! `r(x) = σ_c(Δε(x)) − σ_c* = 0`, where `σ_c*` are the target stresses `σ0 + n Δσ` (no drift
+//! over many steps). The Jacobian is the controlled block of the consistent tangent
+//! ([`TangentModel`]), with halving of the Newton step while the residual does not decrease.
+//! Convergence: `max |r| ≤ NEWTON_REL_TOL · S`, with the stress scale `S` the largest component
+//! magnitude among the start stress, the updated stress and the targets.
+
+use std::io::Write;
+
+use crate::error::ConstitutiveError;
+use crate::model::Surface;
+pub use crate::model::TangentModel;
+use crate::tensor::{SymTensor, Tangent};
+
+/// required relative residual of the controlled stresses: the issue's 1e-9, far above the
+/// ~1e-15 rounding of one update, far below the 0.1 % of the reference checks.
+pub const NEWTON_REL_TOL: f64 = 1e-9;
+
+/// Newton iterations allowed per step; a consistent tangent needs 1–3 on a smooth branch.
+pub const NEWTON_MAX_ITERATIONS: usize = 50;
+
+/// step halvings tried when a full Newton step does not reduce the residual (branch switches).
+const MAX_HALVINGS: usize = 30;
+
+/// Which components are stress controlled, and the per-step increment of every component.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MixedControl {
+    /// `true`: the stress of this component is prescribed; `false`: its strain is prescribed.
+    pub stress_controlled: [bool; 6],
+    /// per-step increment in storage order: a tensor strain increment where strain controlled,
+    /// a stress increment (Pa) where stress controlled.
+    pub increment: [f64; 6],
+}
+
+/// One point of an element-test path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathPoint<S> {
+    /// load step (0 is the start point).
+    pub step: usize,
+    /// total strain since the start (tensor components).
+    pub strain: SymTensor,
+    /// stress at the end of the step (Pa).
+    pub stress: SymTensor,
+    /// internal variables at the end of the step.
+    pub state: S,
+    /// equivalent plastic strain `ε̄ᵖ`.
+    pub eps_p_bar: f64,
+    /// return-mapping branch of the step.
+    pub surface: Surface,
+    /// plastic multiplier of the step.
+    pub delta_lambda: f64,
+    /// plastic work `σ : Δεᵖ` of the step (J/m³).
+    pub dissipation: f64,
+    /// Newton iterations used (0 when fully strain controlled or already converged).
+    pub iterations: usize,
+}
+
+/// Drives `model` from (`sigma0`, `state0`) through `n_steps` equal steps of `control`.
+///
+/// Returns `n_steps + 1` points, the first being the start state.
+pub fn run_mixed<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    state0: M::State,
+    control: &MixedControl,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    if n_steps == 0 {
+        return Err(ConstitutiveError::InvalidParameter {
+            name: "n_steps",
+            value: 0.0,
+            range: "n_steps >= 1",
+        });
+    }
+    if let Some(&v) = control.increment.iter().find(|v| !v.is_finite()) {
+        return Err(ConstitutiveError::InvalidParameter {
+            name: "increment",
+            value: v,
+            range: "finite components",
+        });
+    }
+    let ctrl: Vec<usize> = (0..6).filter(|&i| control.stress_controlled[i]).collect();
+    let s0 = sigma0.to_array();
+    let mut points = Vec::with_capacity(n_steps + 1);
+    points.push(PathPoint {
+        step: 0,
+        strain: SymTensor::ZERO,
+        stress: sigma0,
+        state: state0,
+        eps_p_bar: model.equivalent_plastic_strain(&state0),
+        surface: Surface::Elastic,
+        delta_lambda: 0.0,
+        dissipation: 0.0,
+        iterations: 0,
+    });
+    let (mut sigma, mut state, mut strain) = (sigma0, state0, SymTensor::ZERO);
+    // unknown strain increments, continued from the previous step.
+    let mut x = [0.0; 6];
+    for step in 1..=n_steps {
+        let mut target = [0.0; 6];
+        for &i in &ctrl {
+            target[i] = s0[i] + step as f64 * control.increment[i];
+        }
+        let build = |x: &[f64; 6]| {
+            let mut e = control.increment;
+            for &i in &ctrl {
+                e[i] = x[i];
+            }
+            SymTensor::from_array(e)
+        };
+        let eval = |x: &[f64; 6]| -> Result<(SymTensor, M::State, _, f64, f64), _> {
+            let d_eps = build(x);
+            let (mut s, mut st) = (sigma, state);
+            let rep = model.update(&mut s, &mut st, &d_eps)?;
+            let sa = s.to_array();
+            let mut scale = max_abs(&sigma.to_array()).max(max_abs(&sa));
+            let mut res = 0.0f64;
+            for &i in &ctrl {
+                scale = scale.max(target[i].abs());
+                res = res.max((sa[i] - target[i]).abs());
+            }
+            Ok((s, st, rep, res, scale))
+        };
+        let mut cur = eval(&x)?;
+        let mut iterations = 0;
+        // residual and scale are finite: the update refuses non-finite results.
+        while cur.3 > NEWTON_REL_TOL * cur.4 {
+            if iterations == NEWTON_MAX_ITERATIONS {
+                return Err(ConstitutiveError::NewtonDidNotConverge {
+                    step,
+                    iterations,
+                    relative_residual: cur.3 / cur.4,
+                    tolerance: NEWTON_REL_TOL,
+                });
+            }
+            iterations += 1;
+            let t = model.consistent_tangent(&sigma, &state, &build(&x))?;
+            let sa = cur.0.to_array();
+            let dx = solve_block(&t, &ctrl, |i| target[i] - sa[i])
+                .ok_or(ConstitutiveError::SingularTangent { step })?;
+            // full step, halved while the residual grows (kinks between branches).
+            let mut lambda = 1.0;
+            let mut accepted = None;
+            for _ in 0..=MAX_HALVINGS {
+                let mut xn = x;
+                for &i in &ctrl {
+                    xn[i] += lambda * dx[i];
+                }
+                let trial = eval(&xn)?;
+                if trial.3 < cur.3 || trial.3 <= NEWTON_REL_TOL * trial.4 {
+                    accepted = Some((xn, trial));
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            match accepted {
+                Some((xn, next)) => {
+                    x = xn;
+                    cur = next;
+                }
+                None => {
+                    return Err(ConstitutiveError::NewtonDidNotConverge {
+                        step,
+                        iterations,
+                        relative_residual: cur.3 / cur.4,
+                        tolerance: NEWTON_REL_TOL,
+                    });
+                }
+            }
+        }
+        let (s, st, rep, _, _) = cur;
+        strain += build(&x);
+        sigma = s;
+        state = st;
+        points.push(PathPoint {
+            step,
+            strain,
+            stress: sigma,
+            state,
+            eps_p_bar: model.equivalent_plastic_strain(&state),
+            surface: rep.surface,
+            delta_lambda: rep.delta_lambda,
+            dissipation: rep.dissipation,
+            iterations,
+        });
+    }
+    Ok(points)
+}
+
+/// Plane-strain uniaxial compression (or extension): `ε_yy` prescribed from 0 to `eps_yy_end` in
+/// `n_steps` equal steps, `σ_xx` held at `sigma0.xx` (lateral stress free when 0),
+/// `ε_zz = 0` (so `σ_zz` builds up), shear strains zero.
+pub fn uniaxial_plane_strain<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    eps_yy_end: f64,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let n = n_steps.max(1) as f64;
+    let control = MixedControl {
+        stress_controlled: [true, false, false, false, false, false],
+        increment: [0.0, eps_yy_end / n, 0.0, 0.0, 0.0, 0.0],
+    };
+    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+}
+
+/// Drained simple shear at constant vertical stress: engineering shear `γ_xy = 2ε_xy` prescribed
+/// from 0 to `gamma_end`, `σ_yy` held at `sigma0.yy` (`ε_yy` free: dilation or contraction),
+/// `ε_xx = ε_zz = 0`, `ε_yz = ε_zx = 0`.
+pub fn simple_shear<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    gamma_end: f64,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let n = n_steps.max(1) as f64;
+    let control = MixedControl {
+        stress_controlled: [false, true, false, false, false, false],
+        increment: [0.0, 0.0, 0.0, 0.5 * gamma_end / n, 0.0, 0.0],
+    };
+    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+}
+
+/// Isotropic compression (`eps_v_end < 0`) or extension (`> 0`): `ε_xx = ε_yy = ε_zz = ε_v/3`
+/// prescribed, shear strains zero (fully strain controlled, so it also runs past the apex).
+pub fn isotropic<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    eps_v_end: f64,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let d = eps_v_end / (3.0 * n_steps.max(1) as f64);
+    let control =
+        MixedControl { stress_controlled: [false; 6], increment: [d, d, d, 0.0, 0.0, 0.0] };
+    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+}
+
+/// CSV header matching [`write_csv`] rows.
+pub const CSV_HEADER: &str = "test,step,eps_xx,eps_yy,eps_zz,gamma_xy,gamma_yz,gamma_zx,eps_v,\
+sig_xx,sig_yy,sig_zz,sig_xy,sig_yz,sig_zx,p,sqrt_j2,eps_p_bar,surface,delta_lambda,dissipation";
+
+/// Writes a path as CSV rows labelled `test` (strains dimensionless, engineering shear `γ = 2ε`,
+/// stresses in Pa, tension positive); writes [`CSV_HEADER`] first when `header` is true.
+pub fn write_csv<W: Write, S>(
+    w: &mut W,
+    test: &str,
+    path: &[PathPoint<S>],
+    header: bool,
+) -> std::io::Result<()> {
+    if header {
+        writeln!(w, "{CSV_HEADER}")?;
+    }
+    for p in path {
+        let (e, s) = (p.strain, p.stress);
+        writeln!(
+            w,
+            "{test},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{:e},{:e}",
+            p.step,
+            e.xx,
+            e.yy,
+            e.zz,
+            2.0 * e.xy,
+            2.0 * e.yz,
+            2.0 * e.zx,
+            e.trace(),
+            s.xx,
+            s.yy,
+            s.zz,
+            s.xy,
+            s.yz,
+            s.zx,
+            s.mean(),
+            s.j2().sqrt(),
+            p.eps_p_bar,
+            p.surface.as_str(),
+            p.delta_lambda,
+            p.dissipation,
+        )?;
+    }
+    Ok(())
+}
+
+fn max_abs(a: &[f64; 6]) -> f64 {
+    a.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// solves `T[c][c] dx[c] = rhs(c)` over the controlled indices by Gaussian elimination with
+/// partial pivoting; `None` if the block is singular to working precision.
+fn solve_block(t: &Tangent, ctrl: &[usize], rhs: impl Fn(usize) -> f64) -> Option<[f64; 6]> {
+    let n = ctrl.len();
+    let mut a = [[0.0; 7]; 6];
+    let mut norm = 0.0f64;
+    for (r, &i) in ctrl.iter().enumerate() {
+        for (c, &j) in ctrl.iter().enumerate() {
+            a[r][c] = t[i][j];
+            norm = norm.max(t[i][j].abs());
+        }
+        a[r][n] = rhs(i);
+    }
+    // pivots below this are rounding noise of the block entries.
+    let tiny = norm * 1e-13;
+    for col in 0..n {
+        let piv = (col..n).max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))?;
+        if a[piv][col].abs() <= tiny || !a[piv][col].is_finite() {
+            return None;
+        }
+        a.swap(col, piv);
+        let (top, bottom) = a.split_at_mut(col + 1);
+        let pivot = &top[col];
+        for row in bottom.iter_mut().take(n - col - 1) {
+            let m = row[col] / pivot[col];
+            for (x, p) in row[col..=n].iter_mut().zip(&pivot[col..=n]) {
+                *x -= m * p;
+            }
+        }
+    }
+    let mut y = [0.0; 6];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|c| a[r][c] * y[c]).sum();
+        y[r] = (a[r][n] - s) / a[r][r];
+    }
+    let mut dx = [0.0; 6];
+    for (r, &i) in ctrl.iter().enumerate() {
+        dx[i] = y[r];
+    }
+    Some(dx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elastic::LinearElastic;
+
+    /// elastic closed forms through a 1e-9 Newton tolerance: a few times 1e-9 relative.
+    const ELASTIC_REL: f64 = 1e-8;
+
+    #[test]
+    fn elastic_uniaxial_plane_strain_matches_closed_form() {
+        // σ_xx = 0, ε_zz = 0: σ_yy = E/(1 − ν²) ε_yy, ε_xx = −ν/(1 − ν) ε_yy, σ_zz = ν σ_yy.
+        let (e, nu) = (2.0e6, 0.3);
+        let m = LinearElastic::from_young_poisson(e, nu).unwrap();
+        let path = uniaxial_plane_strain(&m, SymTensor::ZERO, -1e-3, 10).unwrap();
+        assert_eq!(path.len(), 11);
+        let last = path.last().unwrap();
+        let syy = e / (1.0 - nu * nu) * -1e-3;
+        assert!((last.stress.yy - syy).abs() <= ELASTIC_REL * syy.abs());
+        assert!((last.stress.zz - nu * syy).abs() <= ELASTIC_REL * syy.abs());
+        assert!(last.stress.xx.abs() <= ELASTIC_REL * syy.abs());
+        let exx = -nu / (1.0 - nu) * -1e-3;
+        assert!((last.strain.xx - exx).abs() <= ELASTIC_REL * exx.abs());
+        // linear problem: Newton converges in at most one iteration per step.
+        assert!(path.iter().all(|p| p.iterations <= 1));
+    }
+
+    #[test]
+    fn stress_controlled_isotropic_path_hits_targets() {
+        let m = LinearElastic::from_young_poisson(1.0e7, 0.25).unwrap();
+        let control = MixedControl { stress_controlled: [true; 6], increment: [-100.0; 6] };
+        let path = run_mixed(&m, SymTensor::ZERO, (), &control, 5).unwrap();
+        let last = path.last().unwrap();
+        for (s, target) in last.stress.to_array().into_iter().zip([-500.0; 6]) {
+            assert!((s - target).abs() <= ELASTIC_REL * 500.0);
+        }
+        // ε = C⁻¹ : σ.
+        let e = m.strain_from_stress(&last.stress);
+        assert!((last.strain - e).norm() <= ELASTIC_REL * e.norm());
+    }
+
+    #[test]
+    fn bad_loading_is_rejected() {
+        let m = LinearElastic::from_young_poisson(1.0e7, 0.25).unwrap();
+        assert!(matches!(
+            uniaxial_plane_strain(&m, SymTensor::ZERO, -1e-3, 0),
+            Err(ConstitutiveError::InvalidParameter { name: "n_steps", .. })
+        ));
+        assert!(matches!(
+            simple_shear(&m, SymTensor::ZERO, f64::NAN, 3),
+            Err(ConstitutiveError::InvalidParameter { name: "increment", .. })
+        ));
+    }
+
+    #[test]
+    fn csv_has_one_row_per_point_and_matching_columns() {
+        let m = LinearElastic::from_young_poisson(1.0e7, 0.25).unwrap();
+        let path = isotropic(&m, SymTensor::ZERO, -1e-3, 4).unwrap();
+        let mut out = Vec::new();
+        write_csv(&mut out, "iso", &path, true).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<_> = text.lines().collect();
+        assert_eq!(lines.len(), 1 + path.len());
+        let ncol = CSV_HEADER.split(',').count();
+        assert!(lines.iter().all(|l| l.split(',').count() == ncol));
+    }
+}

@@ -1,0 +1,87 @@
+//! Typed errors of the constitutive crate: each names the offending quantity, its value and what
+//! would have been admissible.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building or integrating a constitutive model.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum ConstitutiveError {
+    /// a material or loading parameter lies outside its admissible range.
+    #[error("parameter `{name}` = {value} is outside its admissible range {range}")]
+    InvalidParameter {
+        /// parameter name as spelled in the API (e.g. `"poisson"`).
+        name: &'static str,
+        /// the rejected value.
+        value: f64,
+        /// the admissible range, e.g. `"-1 < poisson < 0.5"`.
+        range: &'static str,
+    },
+    /// softening so strong that the return mapping has no unique solution.
+    #[error(
+        "hardening_modulus H = {hardening_modulus} Pa makes the return mapping ill posed \
+         ({condition}); admissible: H > {lower_bound} Pa"
+    )]
+    IllPosedSoftening {
+        /// the rejected plastic modulus `H` (Pa).
+        hardening_modulus: f64,
+        /// the smallest (excluded) admissible `H` for the other parameters (Pa).
+        lower_bound: f64,
+        /// which well-posedness condition fails.
+        condition: &'static str,
+    },
+    /// a component of the strain increment is NaN or infinite.
+    #[error("strain increment component `{component}` = {value} is not finite")]
+    NonFiniteStrainIncrement {
+        /// component name (`"xx"`, `"xy"`, ...).
+        component: &'static str,
+        /// the offending value.
+        value: f64,
+    },
+    /// a component of the stress passed to the model is NaN or infinite.
+    #[error("stress component `{component}` = {value} Pa is not finite")]
+    NonFiniteStress {
+        /// component name (`"xx"`, `"xy"`, ...).
+        component: &'static str,
+        /// the offending value.
+        value: f64,
+    },
+    /// an internal variable passed to the model is NaN or infinite.
+    #[error("internal variable `{name}` = {value} is not finite")]
+    NonFiniteState {
+        /// variable name (`"k"`, `"eps_p_bar"`, `"back_stress.xy"`, ...).
+        name: &'static str,
+        /// the offending value.
+        value: f64,
+    },
+    /// a friction-free cone (α = 0) softened to a negative size: no stress satisfies `f ≤ 0`.
+    #[error(
+        "the yield surface is empty: cone size k = {k} Pa < 0 with friction coefficient alpha = 0 \
+         (admissible: k >= 0 when the friction angle is 0)"
+    )]
+    EmptyElasticDomain {
+        /// the (softened) cone size `k` (Pa).
+        k: f64,
+    },
+    /// the mixed-control Newton iteration of an element test did not reach its tolerance.
+    #[error(
+        "element test step {step}: Newton iteration stopped after {iterations} iterations with \
+         relative residual {relative_residual:e} (required <= {tolerance:e})"
+    )]
+    NewtonDidNotConverge {
+        /// load step (1-based) that failed.
+        step: usize,
+        /// iterations performed.
+        iterations: usize,
+        /// last residual of the controlled stresses divided by the stress scale.
+        relative_residual: f64,
+        /// required relative residual.
+        tolerance: f64,
+    },
+    /// the controlled block of the tangent is singular (e.g. stress control on a perfectly
+    /// plastic plateau).
+    #[error("element test step {step}: the stress-controlled block of the tangent is singular")]
+    SingularTangent {
+        /// load step (1-based) that failed.
+        step: usize,
+    },
+}

@@ -1,0 +1,68 @@
+//! Small-strain constitutive models for geomaterials: linear elasticity and Drucker-Prager with
+//! non-associated flow and Prager mixed hardening, integrated one strain increment at a time.
+//!
+//! This crate implements §6 of Abe, Johansson & Konagai (2005), "Dry sand flow analysis with
+//! MPM" (eq 10–11: elastic increment; eqs 23–25: Drucker-Prager yield function, plastic potential
+//! and flow rule), on full 3D symmetric tensors so that 2D (plane strain: `Δε_zz = Δε_yz =
+//! Δε_zx = 0`, `σ_zz` carried) and 3D codes can both use it. It knows nothing of grids or
+//! particles: a solver calls [`ConstitutiveModel::update`] once per material point and step.
+//!
+//! # Glossary
+//! - `σ` stress, `ε` strain ([`SymTensor`], storage `[xx, yy, zz, xy, yz, zx]`, tensor shear
+//!   components: `ε_xy = γ_xy/2`), `I1 = tr σ`, `J2 = ½ dev σ : dev σ`.
+//! - `K`, `G`, `E`, `ν` elastic moduli ([`LinearElastic`]).
+//! - `α`, `αg`, `k`, `β`, `H`, `M`, `Δλ`, `ε̄ᵖ`: Drucker-Prager friction and dilatancy
+//!   coefficients, cone size, back stress, plastic modulus, mixing parameter, plastic multiplier
+//!   and equivalent plastic strain ([`DruckerPrager`]).
+//!
+//! Sign convention: **tension positive** (compression has negative stress and strain).
+//! Units: SI (Pa, J/m³, kg/m³, m/s); angles in degrees in parameter structs.
+//!
+//! # Map
+//! - [`tensor`]: [`SymTensor`] and the 6×6 [`Tangent`] convention.
+//! - [`elastic`]: [`LinearElastic`] (eq 10), wave speeds for the time step (eq 13).
+//! - [`model`]: the [`ConstitutiveModel`] trait a solver uses, [`UpdateReport`], [`Surface`],
+//!   and [`TangentModel`].
+//! - [`drucker_prager`]: [`DruckerPrager`] (eqs 23–25) with the cone/apex return mapping and
+//!   its consistent tangent.
+//! - [`element_test`]: single-point drivers with mixed stress/strain control (§6(3)).
+//!
+//! # Example: a plane-strain uniaxial compression test
+//! ```
+//! use mpm_constitutive::element_test::uniaxial_plane_strain;
+//! use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, Surface, SymTensor};
+//!
+//! let sand = DruckerPrager::new(DruckerPragerParams {
+//!     young: 2.0e6,
+//!     poisson: 0.3,
+//!     cohesion: 10.0,
+//!     friction_angle_deg: 40.0,
+//!     dilatancy_angle_deg: 0.0,
+//!     hardening_modulus: 0.0,
+//!     mixing: 1.0,
+//!     cone_match: ConeMatch::PlaneStrain,
+//! })?;
+//! // compress to ε_yy = −1e-3 in 400 steps with σ_xx = 0 and ε_zz = 0.
+//! let path = uniaxial_plane_strain(&sand, SymTensor::ZERO, -1.0e-3, 400)?;
+//! let first_yield = path.iter().find(|p| p.surface == Surface::Cone).unwrap();
+//! let last = path.last().unwrap();
+//! assert!(first_yield.stress.yy < -28.0 && first_yield.stress.yy > -29.5);
+//! // perfectly plastic, non-dilatant: the steady state of the paper's element test.
+//! assert!((last.stress.yy - -36.15).abs() < 0.01);
+//! assert!(last.stress.xx.abs() < 1e-6);
+//! assert!(last.eps_p_bar > 0.0);
+//! # Ok::<(), mpm_constitutive::ConstitutiveError>(())
+//! ```
+
+pub mod drucker_prager;
+pub mod elastic;
+pub mod element_test;
+pub mod error;
+pub mod model;
+pub mod tensor;
+
+pub use drucker_prager::{ConeMatch, DpState, DruckerPrager, DruckerPragerParams};
+pub use elastic::LinearElastic;
+pub use error::ConstitutiveError;
+pub use model::{ConstitutiveModel, Surface, TangentModel, UpdateReport};
+pub use tensor::{SymTensor, Tangent};
