@@ -51,7 +51,8 @@ impl QuadraticBSpline {
 /// nearest node c to u ≥ 0 and the (weight, d/du) pairs for c−1, c, c+1.
 #[inline(always)]
 fn bspline_axis(u: f64) -> (i32, [(f64, f64); 3]) {
-    let c = (u + 0.5) as i32; // u ≥ 0: truncation is floor, so this rounds to nearest.
+    // u ≥ −LOCATE_SLACK, so u + 0.5 > 0 and truncation is floor: c is the nearest node.
+    let c = (u + 0.5) as i32;
     let d = u - f64::from(c);
     let (m, p) = (0.5 - d, 0.5 + d);
     (c, [(0.5 * m * m, -m), (0.75 - d * d, -2.0 * d), (0.5 * p * p, p)])

@@ -100,7 +100,8 @@ fn gimp_1d(r: f64, p: f64) -> (f64, f64) {
 /// the nearest node c to u ≥ 0 and the three 1D (weight, derivative) pairs for c−1, c, c+1.
 #[inline(always)]
 fn gimp_axis(u: f64, p: f64) -> (i32, [(f64, f64); 3]) {
-    let c = (u + 0.5) as i32; // u ≥ 0: truncation is floor, so this rounds to nearest.
+    // u ≥ −LOCATE_SLACK, so u + 0.5 > 0 and truncation is floor: c is the nearest node.
+    let c = (u + 0.5) as i32;
     let d = u - f64::from(c);
     (c, [gimp_1d(1.0 + d, p), gimp_1d(d, p), gimp_1d(d - 1.0, p)])
 }

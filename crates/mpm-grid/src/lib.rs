@@ -51,3 +51,10 @@ pub use terrain::{
 /// most cells (or rows, or columns) along one axis: 2³⁰, so that node indices, ghost layers and
 /// i + 1 stay far from i32 overflow.
 pub const MAX_CELLS_PER_AXIS: usize = 1 << 30;
+
+/// how far beyond the grid's edges (and below the ground), in cells, a point is still located
+/// in the edge cell rather than rejected: 1e-9 of a cell, far above the round-off of positions
+/// computed to lie on a boundary (~1e-15 relative) and far below anything physical. Such a point
+/// is not clamped: its cell map extrapolates by at most this much, so the weights still sum to
+/// one and reproduce linear fields exactly (a weight may be negative by ~1e-9).
+pub const LOCATE_SLACK: f64 = 1e-9;

@@ -8,12 +8,13 @@
 //! - ξ = 2(u_x − i) − 1, η = 2(u_y − j) − 1: eqs 19–20 for a cell with flat bottom and top.
 //! - boundaries: floor j = 0 (normal +y), left wall i = 0 (normal +x), right wall i = nx
 //!   (normal −x). The top is open.
+//! - points up to [`LOCATE_SLACK`] cells beyond an edge belong to the edge cell.
 //! - units SI (m).
 
-use crate::MAX_CELLS_PER_AXIS;
 use crate::error::{GridError, LocateError};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, CellCoords, NodeId};
+use crate::{LOCATE_SLACK, MAX_CELLS_PER_AXIS};
 
 /// Regular Cartesian grid of nx × ny cells of size dx × dy.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -96,17 +97,19 @@ impl RegularGrid {
         self.origin + self.cell * Vector::new(f64::from(node.i), f64::from(node.j))
     }
 
-    /// the point in cell units u = (x − o)/(dx, dy), checked to lie in [0, nx] × [0, ny].
+    /// the point in cell units u = (x − o)/(dx, dy), checked to lie in [0, nx] × [0, ny] up to
+    /// [`LOCATE_SLACK`].
     #[inline]
     pub(crate) fn units_of(&self, p: Vector) -> Result<Vector, LocateError> {
         let u = (p - self.origin) * self.inv_cell;
-        let (nx, ny) = (self.cells[0] as f64, self.cells[1] as f64);
-        if u.x >= 0.0 && u.x <= nx && u.y >= 0.0 && u.y <= ny {
+        let x_range = -LOCATE_SLACK..=self.cells[0] as f64 + LOCATE_SLACK;
+        let y_range = -LOCATE_SLACK..=self.cells[1] as f64 + LOCATE_SLACK;
+        if x_range.contains(&u.x) && y_range.contains(&u.y) {
             return Ok(u);
         }
         Err(if !p.is_finite() {
             LocateError::NonFinite { x: p.x, y: p.y }
-        } else if u.x >= 0.0 && u.x <= nx && u.y < 0.0 {
+        } else if x_range.contains(&u.x) && u.y < 0.0 {
             LocateError::BelowGround { x: p.x, y: p.y, ground_y: self.origin.y }
         } else {
             LocateError::Outside { x: p.x, y: p.y }
@@ -116,7 +119,8 @@ impl RegularGrid {
     /// cell index and fractions (a, b) ∈ [0, 1]² of a point already in cell units.
     #[inline]
     pub(crate) fn cell_of_units(&self, u: Vector) -> (i32, i32, f64, f64) {
-        // u ≥ 0 so truncation is floor; the far edges belong to the last cell.
+        // truncation is floor for u ≥ 0 and saturates to 0 within the slack below 0; the far
+        // edges belong to the last cell.
         let i = (u.x as usize).min(self.cells[0] - 1);
         let j = (u.y as usize).min(self.cells[1] - 1);
         (i as i32, j as i32, u.x - i as f64, u.y - j as f64)

@@ -26,7 +26,8 @@
 //!
 //! # Locating a point (O(1), closed form)
 //! i = ⌊(x − x0)/l⌋, a = (x − x0)/l − i (eq 19); the column's ground height y_g(x) from its two
-//! ground nodes; t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j (eq 20). The profile segment of a column is
+//! ground nodes; t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j (eq 20). Points up to
+//! [`LOCATE_SLACK`](crate::LOCATE_SLACK) cells beyond an edge belong to the edge cell. The profile segment of a column is
 //! found by a binary search over the K+1 profile points, so the grid's memory is O(K), not
 //! O(columns): a 10 km long grid costs what its profile costs.
 //!
@@ -44,11 +45,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::MAX_CELLS_PER_AXIS;
 use crate::error::{GridError, LocateError};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, CellCoords, NodeId};
 use crate::skewed_cell::SkewedCell;
+use crate::{LOCATE_SLACK, MAX_CELLS_PER_AXIS};
 
 /// relative distance (in units of l) within which a profile point counts as lying on a column
 /// boundary: far above the round-off of (X_k − x0)/l for any sane input (~1e-15·K), far below any
@@ -313,15 +314,16 @@ impl TerrainGrid {
         }
     }
 
-    /// (column, a) for an x in range, a = (x − x_i)/l ∈ [0, 1]; `None` outside or non-finite.
+    /// (column, a) for an x in range, a = (x − x_i)/l ∈ [0, 1] (up to the slack); `None`
+    /// outside or non-finite.
     #[inline]
     fn column_of(&self, x: f64) -> Option<(usize, f64)> {
         let u = (x - self.x0) * self.inv_l;
-        let n = self.columns as f64;
-        if !(u >= 0.0 && u <= n) {
+        if !(-LOCATE_SLACK..=self.columns as f64 + LOCATE_SLACK).contains(&u) {
             return None;
         }
-        // u ≥ 0, so truncation is floor; the right edge belongs to the last column.
+        // truncation is floor for u ≥ 0 and saturates to 0 for the slack below 0; the right
+        // edge (and the slack beyond it) belongs to the last column.
         let i = (u as usize).min(self.columns - 1);
         Some((i, u - i as f64))
     }
@@ -361,7 +363,7 @@ impl TerrainGrid {
         let (ya, yb) = self.column_ground(i);
         let ground_y = ya + (yb - ya) * a;
         let t = (p.y - ground_y) * self.inv_h;
-        if !(0.0..=self.rows as f64).contains(&t) {
+        if !(-LOCATE_SLACK..=self.rows as f64 + LOCATE_SLACK).contains(&t) {
             return Err(if !p.y.is_finite() {
                 LocateError::NonFinite { x: p.x, y: p.y }
             } else if t < 0.0 {
