@@ -104,9 +104,19 @@ fn step_all(
     }
 }
 
-/// [`Boundary::apply`] for a node on any number of boundaries (usually one or two), with the treatment
-/// of corners described in this module. With one boundary it is [`Boundary::apply`]; with none the
-/// node is untouched. Never panics; bad input is handled as by [`Boundary::apply`].
+/// [`Boundary::apply`] for a node on any number of boundaries (usually one or two).
+///
+/// 1. If any boundary is `Fixed`, the first `Fixed` one in slice order decides: the node is fixed.
+/// 2. Otherwise the pressed boundaries (v\*·n_k < 0) are tried most pressed first (smallest v\*·n_k,
+///    ties by slice order), each alone as by [`Boundary::apply`]; the first result whose end velocity
+///    satisfies v^L·n_j ≥ −[`FEASIBILITY_TOLERANCE`]·|v\*| for every boundary j is returned.
+/// 3. No boundary pressed: the node is untouched. Pressed but no admissible result: the node is
+///    pinned and stops (v^L = 0, status `Sticking`, all removed energy reported as normal work).
+///
+/// The order of the slice matters only for ties and for which of several `Fixed` boundaries splits
+/// the work. With one boundary it is
+/// [`Boundary::apply`]; with none the node is untouched. Never panics; bad input is handled as by
+/// [`Boundary::apply`].
 pub fn apply_all(
     boundaries: &[Boundary],
     mass: f64,

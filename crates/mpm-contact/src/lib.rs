@@ -51,8 +51,13 @@
 //! ½ m |v\*|² − ½ m |v|² that the solver's ledger must count for it.
 //!
 //! # Corners
-//! [`apply_all`] and [`constrain_velocity_all`] handle a node on several boundaries by an active set;
-//! see the `corner` module for the rule and why it is the exact projection for frictionless walls.
+//! [`apply_all`] and [`constrain_velocity_all`] handle a node on several boundaries (a box corner, a
+//! wall meeting the ground, a kink of the ground profile) by an active set, deterministically:
+//! a `Fixed` boundary decides alone; otherwise the single-boundary results of the pressed boundaries
+//! are tried, most pressed first, and the first one that does not enter any other boundary is taken;
+//! if none qualifies the node is pinned and stops. For frictionless boundaries this is exactly the
+//! Euclidean projection of v\* onto the admissible cone {v : v·n_k ≥ 0}, so a fast node crossing a
+//! gentle kink keeps sliding instead of stopping merely because it presses on both sides.
 
 mod boundary;
 mod corner;
