@@ -5,6 +5,18 @@
 //! acceleration f/m, and the boundaries it lies on. It knows nothing of particles, materials or the
 //! grid's geometry.
 //!
+//! ```
+//! use mpm_contact::{Boundary, ContactStatus, Friction, Vector};
+//!
+//! // A node sliding at 10 m/s on the ground (μ = 0.3) under gravity decelerates at exactly μg.
+//! let ground = Boundary::new(Vector::Y, Friction::Coulomb { mu: 0.3 })?;
+//! let out = ground.apply(1.0, Vector::new(10.0, 0.0), Vector::new(0.0, -9.81), 1e-3);
+//! assert_eq!(out.status, ContactStatus::Sliding);
+//! assert_eq!(out.acceleration, Vector::new(-0.3 * 9.81, 0.0));
+//! assert_eq!(out.velocity.y, 0.0);
+//! # Ok::<(), mpm_contact::ContactError>(())
+//! ```
+//!
 //! # Glossary
 //! - n: unit normal of a boundary, pointing **from the boundary into the material** (the paper's eq 14
 //!   is written with the opposite sign convention; the physics, "the node presses on the wall", is the
