@@ -181,6 +181,10 @@ pub struct DruckerPrager {
     inv_d: f64,
     /// `1 / (G + (1 − M)H)`.
     inv_b: f64,
+    /// `1 / α` (0 when `α = 0`: no apex).
+    inv_alpha: f64,
+    /// `1 / (9K)`.
+    inv_9k: f64,
 }
 
 const SQRT_2: f64 = std::f64::consts::SQRT_2;
@@ -192,17 +196,17 @@ struct Trial {
     i1: f64,
     /// `ξᵗʳ = dev σᵗʳ − dev β`.
     xi: SymTensor,
-    /// `qᵗʳ = √J2(ξᵗʳ)`.
-    q: f64,
+    /// `J2(ξᵗʳ) = qᵗʳ²`.
+    j2: f64,
     /// `dev β`.
     beta: SymTensor,
-    f: f64,
 }
 
-/// outcome of the return mapping, before it is written back.
+/// outcome of the return mapping, before it is written back (`q_tr = qᵗʳ`; `i1`, `q`, `k` are
+/// the returned values).
 enum Return {
     Elastic,
-    Cone { dl: f64, i1: f64, q: f64, k: f64 },
+    Cone { dl: f64, i1: f64, q: f64, k: f64, q_tr: f64 },
     Apex { dl: f64, i1: f64, k: f64 },
 }
 
@@ -274,6 +278,8 @@ impl DruckerPrager {
             kin_h,
             inv_d: 1.0 / d,
             inv_b: 1.0 / b,
+            inv_alpha: if alpha > 0.0 { 1.0 / alpha } else { 0.0 },
+            inv_9k: 1.0 / (9.0 * bulk),
         })
     }
 
@@ -336,8 +342,8 @@ impl DruckerPrager {
         let trial = self.trial(sigma, state, d_eps);
         let g = self.elastic.shear_modulus();
         let bulk = self.elastic.bulk_modulus();
-        let n_hat =
-            if trial.q > 0.0 { trial.xi * (FRAC_1_SQRT_2 / trial.q) } else { SymTensor::ZERO };
+        let q_tr = trial.j2.sqrt();
+        let n_hat = if q_tr > 0.0 { trial.xi * (FRAC_1_SQRT_2 / q_tr) } else { SymTensor::ZERO };
         let p_dev = deviatoric_projector();
         match self.return_map(&trial, state)? {
             Return::Elastic => Ok(self.elastic.stiffness_matrix()),
@@ -351,7 +357,7 @@ impl DruckerPrager {
                     &dyad(&c_dg, &c_df),
                 );
                 let radial = tangent_axpby(1.0, &p_dev, -1.0, &dyad(&n_hat, &n_hat));
-                Ok(tangent_axpby(1.0, &t, -2.0 * g * g * dl / trial.q, &radial))
+                Ok(tangent_axpby(1.0, &t, -2.0 * g * g * dl / q_tr, &radial))
             }
             Return::Apex { .. } => {
                 let vol = SQRT_2 * g * self.iso_h * self.inv_b / (3.0 * self.alpha);
@@ -361,23 +367,37 @@ impl DruckerPrager {
         }
     }
 
+    #[inline]
     fn check_inputs(
         &self,
         sigma: &SymTensor,
         state: &DpState,
         d_eps: &SymTensor,
     ) -> Result<(), ConstitutiveError> {
+        // non-short-circuit `&`: one branch for the common all-finite case.
+        let ok = sigma.is_finite()
+            & d_eps.is_finite()
+            & state.back_stress.is_finite()
+            & state.k.is_finite()
+            & state.eps_p_bar.is_finite();
+        if ok { Ok(()) } else { Self::non_finite_input(sigma, state, d_eps) }
+    }
+
+    /// names the first non-finite input (the slow path of [`check_inputs`](Self::check_inputs)).
+    #[cold]
+    #[inline(never)]
+    fn non_finite_input(
+        sigma: &SymTensor,
+        state: &DpState,
+        d_eps: &SymTensor,
+    ) -> Result<(), ConstitutiveError> {
         check_finite(sigma, d_eps)?;
-        let b = &state.back_stress;
-        if b.is_finite() && state.k.is_finite() && state.eps_p_bar.is_finite() {
-            return Ok(());
-        }
-        let name = if !state.k.is_finite() {
+        let (name, value) = if !state.k.is_finite() {
             ("k", state.k)
         } else if !state.eps_p_bar.is_finite() {
             ("eps_p_bar", state.eps_p_bar)
         } else {
-            let (c, v) = b.first_non_finite().unwrap_or(("xx", f64::NAN));
+            let (c, v) = state.back_stress.first_non_finite().unwrap_or(("xx", f64::NAN));
             let name = match c {
                 "xx" => "back_stress.xx",
                 "yy" => "back_stress.yy",
@@ -388,7 +408,7 @@ impl DruckerPrager {
             };
             (name, v)
         };
-        Err(ConstitutiveError::NonFiniteState { name: name.0, value: name.1 })
+        Err(ConstitutiveError::NonFiniteState { name, value })
     }
 
     #[inline]
@@ -407,30 +427,37 @@ impl DruckerPrager {
         let beta = state.back_stress.deviator();
         let i1 = st.trace();
         let xi = st.deviator() - beta;
-        let q = (0.5 * xi.ddot(&xi)).sqrt();
-        let f = self.alpha * i1 + q - state.k;
-        Trial { sigma: st, i1, xi, q, beta, f }
+        let j2 = 0.5 * xi.ddot(&xi);
+        Trial { sigma: st, i1, xi, j2, beta }
     }
 
     #[inline]
     fn return_map(&self, t: &Trial, state: &DpState) -> Result<Return, ConstitutiveError> {
-        // `!(f > 0)` would also catch NaN, which the input checks exclude.
-        if t.f <= 0.0 {
+        // f = qᵗʳ − r with r = k − α I1ᵗʳ the strength at the trial pressure; f ≤ 0 is
+        // r ≥ 0 and J2 ≤ r², which spares the square root on the (most frequent) elastic path.
+        let r = state.k - self.alpha * t.i1;
+        if r >= 0.0 && t.j2 <= r * r {
+            return Ok(Return::Elastic);
+        }
+        let q_tr = t.j2.sqrt();
+        let f = q_tr - r;
+        if f <= 0.0 {
+            // J2 > r² by rounding only.
             return Ok(Return::Elastic);
         }
         // cone: Δλ = fᵗʳ / (9Kααg + G + H); q from the consistency condition.
-        let dl = t.f * self.inv_d;
+        let dl = f * self.inv_d;
         let k = state.k + self.iso_h * dl;
         let i1 = t.i1 - self.nine_k_alpha_g * dl;
         let q = k - self.alpha * i1;
-        if t.q > 0.0 && q >= 0.0 {
-            return Ok(Return::Cone { dl, i1, q, k });
+        if q_tr > 0.0 && q >= 0.0 {
+            return Ok(Return::Cone { dl, i1, q, k, q_tr });
         }
         // apex: Δλ = qᵗʳ / (G + (1 − M)H), I1 = k_{n+1}/α.
-        let dl = t.q * self.inv_b;
+        let dl = q_tr * self.inv_b;
         let k = state.k + self.iso_h * dl;
         if self.alpha > 0.0 {
-            Ok(Return::Apex { dl, i1: k / self.alpha, k })
+            Ok(Return::Apex { dl, i1: k * self.inv_alpha, k })
         } else {
             Err(ConstitutiveError::EmptyElasticDomain { k })
         }
@@ -459,13 +486,13 @@ impl ConstitutiveModel for DruckerPrager {
         let t = self.trial(sigma, state, d_eps);
         let (new_sigma, new_state, report) = match self.return_map(&t, state)? {
             Return::Elastic => (t.sigma, *state, UpdateReport::ELASTIC),
-            Return::Cone { dl, i1, q, k } => {
-                // ‖ξᵗʳ‖ = √2 qᵗʳ.
-                let n_hat = t.xi * (FRAC_1_SQRT_2 / t.q);
-                let beta = t.beta + n_hat * (SQRT_2 * self.kin_h * dl);
-                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta + n_hat * (SQRT_2 * q);
-                // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : n̂/√2.
-                let work = dl * (self.alpha_g * i1 + q + FRAC_1_SQRT_2 * beta.ddot(&n_hat));
+            Return::Cone { dl, i1, q, k, q_tr } => {
+                // with ‖ξᵗʳ‖ = √2 qᵗʳ, √2 n̂ = ξᵗʳ/qᵗʳ: one division for the whole return.
+                let inv_q = 1.0 / q_tr;
+                let beta = t.beta + t.xi * (self.kin_h * dl * inv_q);
+                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta + t.xi * (q * inv_q);
+                // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : ξᵗʳ/(2qᵗʳ).
+                let work = dl * (self.alpha_g * i1 + q + 0.5 * inv_q * beta.ddot(&t.xi));
                 let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
                 let rep =
                     UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
@@ -476,8 +503,7 @@ impl ConstitutiveModel for DruckerPrager {
                 let beta = t.beta + t.xi * (self.kin_h * self.inv_b);
                 let s = SymTensor::IDENTITY * (i1 / 3.0) + beta;
                 // σ : C⁻¹ : (σᵗʳ − σ) with σᵗʳ − σ = (I1ᵗʳ − I1)/3 I + (G/B) ξᵗʳ.
-                let bulk = self.elastic.bulk_modulus();
-                let work = i1 * (t.i1 - i1) / (9.0 * bulk) + 0.5 * self.inv_b * beta.ddot(&t.xi);
+                let work = i1 * (t.i1 - i1) * self.inv_9k + 0.5 * self.inv_b * beta.ddot(&t.xi);
                 let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
                 let rep =
                     UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };

@@ -122,12 +122,13 @@ impl SymTensor {
     /// true when all six components are finite.
     #[inline]
     pub fn is_finite(&self) -> bool {
+        // `&` rather than `&&`: branch-free, this sits on every update's hot path.
         self.xx.is_finite()
-            && self.yy.is_finite()
-            && self.zz.is_finite()
-            && self.xy.is_finite()
-            && self.yz.is_finite()
-            && self.zx.is_finite()
+            & self.yy.is_finite()
+            & self.zz.is_finite()
+            & self.xy.is_finite()
+            & self.yz.is_finite()
+            & self.zx.is_finite()
     }
 
     /// the components in storage order `[xx, yy, zz, xy, yz, zx]`.
