@@ -44,7 +44,7 @@ impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
         let loc = g.locate_parts(x)?;
         let (w, na, nb) = unit_square(loc.a, loc.b);
         let (inv_l, inv_h) = g.inverse_sizes();
-        let db_dx = -loc.slope * inv_h;
+        let db_dx = loc.db_dx;
         let gradients =
             [0, 1, 2, 3].map(|k| Vector::new(na[k] * inv_l + nb[k] * db_dx, nb[k] * inv_h));
         Ok(Stencil { nodes: corner_nodes(loc.i as i32, loc.j as i32), weights: w, gradients })

@@ -36,8 +36,8 @@ use crate::stencil::{ShapeFunctions, Stencil};
 pub struct Gimp {
     grid: RegularGrid,
     half_particle: Vector,
-    /// lp / h per axis.
-    p: Vector,
+    /// lp / h and its reciprocals, per axis.
+    axes: [GimpAxis; 2],
 }
 
 impl Gimp {
@@ -49,7 +49,8 @@ impl Gimp {
                 return Err(GridError::InvalidParticleHalfSize { axis, value, max: 0.5 * h });
             }
         }
-        Ok(Self { grid, half_particle, p: half_particle / cell })
+        let p = half_particle / cell;
+        Ok(Self { grid, half_particle, axes: [GimpAxis::new(p.x), GimpAxis::new(p.y)] })
     }
 
     /// uGIMP for `ppc` = [n_x, n_y] particles per cell along each axis: lp = cell/(2·n).
@@ -80,30 +81,52 @@ impl Gimp {
     }
 }
 
-/// 1D uGIMP weight and its derivative with respect to r, both in cell units (h = 1, p = lp/h).
-#[inline(always)]
-fn gimp_1d(r: f64, p: f64) -> (f64, f64) {
-    let q = r.abs();
-    let sign = if r < 0.0 { -1.0 } else { 1.0 };
-    if q < p {
-        (1.0 - (r * r + p * p) / (2.0 * p), -r / p)
-    } else if q <= 1.0 - p {
-        (1.0 - q, -sign)
-    } else if q < 1.0 + p {
-        let e = 1.0 + p - q;
-        (e * e / (4.0 * p), -sign * e / (2.0 * p))
-    } else {
-        (0.0, 0.0)
+/// per-axis constants of the 1D uGIMP weight, in cell units (h = 1, p = lp/h).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct GimpAxis {
+    p: f64,
+    /// 1/p, 1/(2p), 1/(4p).
+    inv_p: f64,
+    inv_2p: f64,
+    inv_4p: f64,
+}
+
+impl GimpAxis {
+    fn new(p: f64) -> Self {
+        Self { p, inv_p: 1.0 / p, inv_2p: 0.5 / p, inv_4p: 0.25 / p }
+    }
+
+    /// weight S(r) and dS/dr for a node at distance r (cell units). All three pieces are
+    /// evaluated and one is selected, so the compiler can avoid unpredictable branches.
+    #[inline(always)]
+    fn weight(&self, r: f64) -> (f64, f64) {
+        let p = self.p;
+        let q = r.abs();
+        let sign = if r < 0.0 { -1.0 } else { 1.0 };
+        // |r| < lp: inside the particle domain.
+        let inner = (1.0 - (r * r + p * p) * self.inv_2p, -r * self.inv_p);
+        // lp ≤ |r| ≤ h − lp: the hat's linear part.
+        let linear = (1.0 - q, -sign);
+        // h − lp < |r| < h + lp: the domain straddles the support's rim (0 beyond it).
+        let e = (1.0 + p - q).max(0.0);
+        let rim = (e * e * self.inv_4p, -sign * e * self.inv_2p);
+        if q < p {
+            inner
+        } else if q <= 1.0 - p {
+            linear
+        } else {
+            rim
+        }
     }
 }
 
-/// the nearest node c to u ≥ 0 and the three 1D (weight, derivative) pairs for c−1, c, c+1.
+/// the nearest node c to u and the three 1D (weight, derivative) pairs for c−1, c, c+1.
 #[inline(always)]
-fn gimp_axis(u: f64, p: f64) -> (i32, [(f64, f64); 3]) {
+fn gimp_axis(u: f64, axis: &GimpAxis) -> (i32, [(f64, f64); 3]) {
     // u ≥ −LOCATE_SLACK, so u + 0.5 > 0 and truncation is floor: c is the nearest node.
     let c = (u + 0.5) as i32;
     let d = u - f64::from(c);
-    (c, [gimp_1d(1.0 + d, p), gimp_1d(d, p), gimp_1d(d - 1.0, p)])
+    (c, [axis.weight(1.0 + d), axis.weight(d), axis.weight(d - 1.0)])
 }
 
 /// assembles a 3×3 tensor-product stencil from per-axis (weight, d/du) triples.
@@ -132,8 +155,8 @@ impl ShapeFunctions<9> for Gimp {
     #[inline]
     fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
         let u = self.grid.units_of(x)?;
-        let (cx, wx) = gimp_axis(u.x, self.p.x);
-        let (cy, wy) = gimp_axis(u.y, self.p.y);
+        let (cx, wx) = gimp_axis(u.x, &self.axes[0]);
+        let (cy, wy) = gimp_axis(u.y, &self.axes[1]);
         Ok(tensor3(cx, cy, wx, wy, self.grid.inverse_cell_size()))
     }
 
@@ -160,14 +183,17 @@ mod tests {
     #[test]
     fn one_d_weight_is_continuous_at_the_breakpoints() {
         let p = 0.25;
+        let axis = GimpAxis::new(p);
         for q in [p, 1.0 - p, 1.0 + p] {
-            let below = gimp_1d(q - 1e-12, p);
-            let above = gimp_1d(q + 1e-12, p);
+            let below = axis.weight(q - 1e-12);
+            let above = axis.weight(q + 1e-12);
             assert!((below.0 - above.0).abs() < 1e-11, "weight jumps at {q}");
             assert!((below.1 - above.1).abs() < 1e-10, "slope jumps at {q}");
         }
         // average of the hat over [−p, p]: 1 − p/2 at the node itself.
-        assert!((gimp_1d(0.0, p).0 - (1.0 - p / 2.0)).abs() < ROUND_OFF);
+        assert!((axis.weight(0.0).0 - (1.0 - p / 2.0)).abs() < ROUND_OFF);
+        assert_eq!(axis.weight(1.3), (0.0, 0.0));
+        assert_eq!(axis.weight(-1.25), (0.0, -0.0));
     }
 
     #[test]

@@ -23,6 +23,8 @@ pub struct RegularGrid {
     cell: Vector,
     inv_cell: Vector,
     cells: [usize; 2],
+    /// cells + LOCATE_SLACK per axis: upper ends of the accepted range in cell units.
+    u_max: Vector,
 }
 
 impl RegularGrid {
@@ -58,7 +60,8 @@ impl RegularGrid {
                 y: far.y,
             });
         }
-        Ok(Self { origin, cell, inv_cell: cell.recip(), cells })
+        let u_max = Vector::new(cells[0] as f64, cells[1] as f64) + LOCATE_SLACK;
+        Ok(Self { origin, cell, inv_cell: cell.recip(), cells, u_max })
     }
 
     /// node (0, 0), m.
@@ -102,27 +105,36 @@ impl RegularGrid {
     #[inline]
     pub(crate) fn units_of(&self, p: Vector) -> Result<Vector, LocateError> {
         let u = (p - self.origin) * self.inv_cell;
-        let x_range = -LOCATE_SLACK..=self.cells[0] as f64 + LOCATE_SLACK;
-        let y_range = -LOCATE_SLACK..=self.cells[1] as f64 + LOCATE_SLACK;
+        let x_range = -LOCATE_SLACK..=self.u_max.x;
+        let y_range = -LOCATE_SLACK..=self.u_max.y;
         if x_range.contains(&u.x) && y_range.contains(&u.y) {
             return Ok(u);
         }
-        Err(if !p.is_finite() {
+        Err(self.locate_error(p, u))
+    }
+
+    /// why a point out of range was rejected; kept out of line, the hot path only branches here.
+    #[cold]
+    #[inline(never)]
+    fn locate_error(&self, p: Vector, u: Vector) -> LocateError {
+        if !p.is_finite() {
             LocateError::NonFinite { x: p.x, y: p.y }
-        } else if x_range.contains(&u.x) && u.y < 0.0 {
+        } else if (-LOCATE_SLACK..=self.u_max.x).contains(&u.x) && u.y < 0.0 {
             LocateError::BelowGround { x: p.x, y: p.y, ground_y: self.origin.y }
         } else {
             LocateError::Outside { x: p.x, y: p.y }
-        })
+        }
     }
 
     /// cell index and fractions (a, b) ∈ [0, 1]² of a point already in cell units.
     #[inline]
     pub(crate) fn cell_of_units(&self, u: Vector) -> (i32, i32, f64, f64) {
-        // truncation is floor for u ≥ 0 and saturates to 0 within the slack below 0; the far
-        // edges belong to the last cell.
-        let i = (u.x as usize).min(self.cells[0] - 1);
-        let j = (u.y as usize).min(self.cells[1] - 1);
+        // truncation is floor for u ≥ 0 and gives 0 within the slack below 0; the far edges
+        // belong to the last cell.
+        // i64 (not usize) keeps the int ↔ float conversions single instructions; cells ≤ 2³⁰
+        // so the i32 node indices are exact.
+        let i = (u.x as i64).min(self.cells[0] as i64 - 1);
+        let j = (u.y as i64).min(self.cells[1] as i64 - 1);
         (i as i32, j as i32, u.x - i as f64, u.y - j as f64)
     }
 

@@ -25,11 +25,12 @@
 //! ([`TerrainGrid::profile`]); that is the ground the solver sees.
 //!
 //! # Locating a point (O(1), closed form)
-//! i = ⌊(x − x0)/l⌋, a = (x − x0)/l − i (eq 19); the column's ground height y_g(x) from its two
-//! ground nodes; t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j (eq 20). Points up to
+//! u = (x − x0)/l, i = ⌊u⌋, a = u − i (eq 19); the ground height y_g(x) = Y_k + r_k·(u − c_k) of
+//! the column's segment k (r_k the rise per column); t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j
+//! (eq 20). Points up to
 //! [`LOCATE_SLACK`](crate::LOCATE_SLACK) cells beyond an edge belong to the edge cell. The profile segment of a column is
-//! found by a binary search over the K+1 profile points, so the grid's memory is O(K), not
-//! O(columns): a 10 km long grid costs what its profile costs.
+//! found by counting the kinks left of it (binary search beyond 16 kinks), so the grid's memory is
+//! O(K), not O(columns): a 10 km long grid costs what its profile costs.
 //!
 //! # Gradients
 //! The Jacobian of a parallelogram cell is constant: ∂a/∂x = 1/l, ∂a/∂y = 0, ∂b/∂x = −s/h,
@@ -130,17 +131,44 @@ pub struct TerrainGrid {
     rise: Vec<f64>,
     /// unit normal of segment k; K entries.
     normals: Vec<Vector>,
+    /// column boundary index of each interior profile point (c_1 ..= c_{K−1}) as f64: the
+    /// segment of a point at u = (x − x0)/l is the number of these ≤ u (the same as the number
+    /// ≤ ⌊u⌋, since they are integers).
+    kinks: Vec<f64>,
+    /// columns + LOCATE_SLACK and rows + LOCATE_SLACK: the accepted u and t ranges' upper ends.
+    u_max: f64,
+    t_max: f64,
+    /// per-segment constants of the locate hot path; K entries.
+    lines: Vec<GroundLine>,
     min_cell: f64,
 }
 
-/// where a point sits: column i, row j, fractions a = (1+ξ)/2, b = (1+η)/2, column slope s.
+/// segment k as the locate hot path needs it: y_g(u) = y0 + rise·(u − c0) with u = (x − x0)/l.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct GroundLine {
+    /// c_k as f64.
+    c0: f64,
+    /// Y_k, m.
+    y0: f64,
+    /// ground rise per column, m.
+    rise: f64,
+    /// ∂b/∂x = −s/h in the segment's cells, 1/m².
+    db_dx: f64,
+}
+
+/// up to this many interior kinks, the segment of a column is found by a branch-free count;
+/// beyond, by binary search.
+const LINEAR_SEARCH_MAX: usize = 16;
+
+/// where a point sits: column i, row j, fractions a = (1+ξ)/2, b = (1+η)/2, and ∂b/∂x.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TerrainLocation {
-    pub i: usize,
-    pub j: usize,
+    pub i: i64,
+    pub j: i64,
     pub a: f64,
     pub b: f64,
-    pub slope: f64,
+    /// ∂b/∂x = −s/h.
+    pub db_dx: f64,
 }
 
 impl TerrainGrid {
@@ -217,6 +245,7 @@ impl TerrainGrid {
         }
         let mut rise = Vec::with_capacity(points.len() - 1);
         let mut normals = Vec::with_capacity(points.len() - 1);
+        let mut lines = Vec::with_capacity(points.len() - 1);
         let mut min_cell = l;
         for k in 0..points.len() - 1 {
             let n_k = f64::from(point_column[k + 1] - point_column[k]);
@@ -229,7 +258,14 @@ impl TerrainGrid {
             min_cell = min_cell.min(normal_height);
             rise.push(r);
             normals.push(Vector::new(-r, l).normalize());
+            lines.push(GroundLine {
+                c0: f64::from(point_column[k]),
+                y0: points[k].y,
+                rise: r,
+                db_dx: -slope / h,
+            });
         }
+        let kinks = point_column[1..point_column.len() - 1].iter().map(|&c| f64::from(c)).collect();
         Ok(Self {
             x0,
             l,
@@ -242,6 +278,10 @@ impl TerrainGrid {
             point_column,
             rise,
             normals,
+            kinks,
+            lines,
+            u_max: columns as f64 + LOCATE_SLACK,
+            t_max: rows as f64 + LOCATE_SLACK,
             min_cell,
         })
     }
@@ -314,66 +354,56 @@ impl TerrainGrid {
         }
     }
 
-    /// (column, a) for an x in range, a = (x − x_i)/l ∈ [0, 1] (up to the slack); `None`
-    /// outside or non-finite.
-    #[inline]
-    fn column_of(&self, x: f64) -> Option<(usize, f64)> {
+    /// u = (x − x0)/l and the column i = ⌊u⌋ of an x in range (up to the slack); `None` outside
+    /// or non-finite.
+    #[inline(always)]
+    fn column_of(&self, x: f64) -> Option<(f64, i64)> {
         let u = (x - self.x0) * self.inv_l;
-        if !(-LOCATE_SLACK..=self.columns as f64 + LOCATE_SLACK).contains(&u) {
+        if !(-LOCATE_SLACK..=self.u_max).contains(&u) {
             return None;
         }
-        // truncation is floor for u ≥ 0 and saturates to 0 for the slack below 0; the right
-        // edge (and the slack beyond it) belongs to the last column.
-        let i = (u as usize).min(self.columns - 1);
-        Some((i, u - i as f64))
+        // truncation is floor for u ≥ 0 and gives 0 for the slack below 0; the right edge (and
+        // the slack beyond it) belongs to the last column. i64 (not usize) keeps the int ↔ float
+        // conversions single instructions.
+        Some((u, (u as i64).min(self.columns as i64 - 1)))
     }
 
-    /// ground heights at both nodes of column i (0 ≤ i < columns), bitwise equal to
-    /// [`Self::node_ground_height`] of those nodes.
-    #[inline]
-    fn column_ground(&self, i: usize) -> (f64, f64) {
-        let k = self.point_at_or_before(i);
-        let ya = self.ground_of_column_in(k, i);
-        let yb = if i + 1 == self.point_column[k + 1] as usize {
-            self.points[k + 1].y
+    /// the ground line under the point at u = (x − x0)/l, u in range; a point on a kink
+    /// belongs to the segment on its right, like its column.
+    #[inline(always)]
+    fn line_at(&self, u: f64) -> &GroundLine {
+        let k = if self.kinks.len() <= LINEAR_SEARCH_MAX {
+            // branch-free: independent of the column computation, so both run in parallel.
+            self.kinks.iter().map(|&c| usize::from(c <= u)).sum()
         } else {
-            self.ground_of_column_in(k, i + 1)
+            self.kinks.partition_point(|&c| c <= u)
         };
-        (ya, yb)
+        &self.lines[k]
     }
 
     /// height of the ground at `x`, m; `None` for a non-finite x or one outside the grid's
     /// x range. This is the function [`Self::locate`] compares against for
-    /// [`LocateError::BelowGround`].
+    /// [`LocateError::BelowGround`]; at node columns it equals [`Self::node_ground_height`] up
+    /// to round-off (exactly at profile points).
     pub fn ground_height(&self, x: f64) -> Option<f64> {
-        let (i, a) = self.column_of(x)?;
-        let (ya, yb) = self.column_ground(i);
-        Some(ya + (yb - ya) * a)
+        let (u, _) = self.column_of(x)?;
+        let s = self.line_at(u);
+        Some(s.y0 + s.rise * (u - s.c0))
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn locate_parts(&self, p: Vector) -> Result<TerrainLocation, LocateError> {
-        let Some((i, a)) = self.column_of(p.x) else {
-            return Err(if p.is_finite() {
-                LocateError::Outside { x: p.x, y: p.y }
-            } else {
-                LocateError::NonFinite { x: p.x, y: p.y }
-            });
+        let Some((u, i)) = self.column_of(p.x) else {
+            return Err(column_error(p));
         };
-        let (ya, yb) = self.column_ground(i);
-        let ground_y = ya + (yb - ya) * a;
+        let s = self.line_at(u);
+        let ground_y = s.y0 + s.rise * (u - s.c0);
         let t = (p.y - ground_y) * self.inv_h;
-        if !(-LOCATE_SLACK..=self.rows as f64 + LOCATE_SLACK).contains(&t) {
-            return Err(if !p.y.is_finite() {
-                LocateError::NonFinite { x: p.x, y: p.y }
-            } else if t < 0.0 {
-                LocateError::BelowGround { x: p.x, y: p.y, ground_y }
-            } else {
-                LocateError::Outside { x: p.x, y: p.y }
-            });
+        if !(-LOCATE_SLACK..=self.t_max).contains(&t) {
+            return Err(row_error(p, t, ground_y));
         }
-        let j = (t as usize).min(self.rows - 1);
-        Ok(TerrainLocation { i, j, a, b: t - j as f64, slope: (yb - ya) * self.inv_l })
+        let j = (t as i64).min(self.rows as i64 - 1);
+        Ok(TerrainLocation { i, j, a: u - i as f64, b: t - j as f64, db_dx: s.db_dx })
     }
 
     /// the cell holding `p` and its natural coordinates (eqs 19–20), O(1).
@@ -490,6 +520,34 @@ impl TerrainGrid {
             + self.point_column.capacity() * size_of::<u32>()
             + self.rise.capacity() * size_of::<f64>()
             + self.normals.capacity() * size_of::<Vector>()
+            + self.kinks.capacity() * size_of::<f64>()
+            + self.lines.capacity() * size_of::<GroundLine>()
+    }
+}
+
+/// why a point whose x is out of range (or non-finite) was rejected. Kept out of line: the
+/// locate hot path only branches to it.
+#[cold]
+#[inline(never)]
+fn column_error(p: Vector) -> LocateError {
+    if p.is_finite() {
+        LocateError::Outside { x: p.x, y: p.y }
+    } else {
+        LocateError::NonFinite { x: p.x, y: p.y }
+    }
+}
+
+/// why a point in the x range whose height t (in rows above the ground) is out of range was
+/// rejected.
+#[cold]
+#[inline(never)]
+fn row_error(p: Vector, t: f64, ground_y: f64) -> LocateError {
+    if !p.y.is_finite() {
+        LocateError::NonFinite { x: p.x, y: p.y }
+    } else if t < 0.0 {
+        LocateError::BelowGround { x: p.x, y: p.y, ground_y }
+    } else {
+        LocateError::Outside { x: p.x, y: p.y }
     }
 }
 
