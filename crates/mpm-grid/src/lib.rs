@@ -21,6 +21,33 @@
 //! points to nodes, weights and gradients, and says where the boundaries are.
 //!
 //! Units SI (m), f64, y up.
+//!
+//! # Example
+//! ```
+//! use mpm_grid::{
+//!     ActiveNodes, Bilinear, KinkPolicy, ShapeFunctions, TerrainGrid, TerrainGridSpec, Vector,
+//! };
+//!
+//! // a 30° slope running into a flat runout at x = 2 m, 0.1 m cells, 10 rows.
+//! let t = 30f64.to_radians().tan();
+//! let grid = TerrainGrid::new(TerrainGridSpec {
+//!     profile: vec![Vector::new(0.0, 2.0 * t), Vector::new(2.0, 0.0), Vector::new(4.0, 0.0)],
+//!     cell_width: 0.1,
+//!     row_height: 0.1,
+//!     rows: 10,
+//!     kink_policy: KinkPolicy::Reject,
+//! })?;
+//! let sf = Bilinear(grid);
+//! let s = sf.stencil(Vector::new(1.05, 0.6))?;
+//! assert!((s.weights.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+//!
+//! let mut active = ActiveNodes::new();
+//! active.rebuild(s.nodes);
+//! assert_eq!(active.len(), 4);
+//! let k = active.index_of(s.nodes[0]).expect("active");
+//! assert_eq!(active.nodes()[k], s.nodes[0]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod active;
 mod bilinear;

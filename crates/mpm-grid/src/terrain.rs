@@ -152,7 +152,7 @@ struct GroundLine {
     y0: f64,
     /// ground rise per column, m.
     rise: f64,
-    /// ∂b/∂x = −s/h in the segment's cells, 1/m².
+    /// ∂b/∂x = −s/h in the segment's cells, 1/m.
     db_dx: f64,
 }
 

@@ -149,11 +149,15 @@ impl TerrainCase {
     }
 }
 
-/// 1–5 segments of 1–12 columns each, slopes within ±50°, l ∈ [0.05, 2] m, h/l ∈ [0.2, 3],
+/// 1–5 (or 17–30) segments of 1–12 columns each, slopes within ±50°, l ∈ [0.05, 2] m, h/l ∈ [0.2, 3],
 /// 1–8 rows, starting anywhere in [−20, 20]² m.
 pub fn terrain_case() -> impl Strategy<Value = TerrainCase> {
     (
-        prop::collection::vec((1u32..=12, -50.0f64..50.0), 1..=5),
+        // mostly a few segments; sometimes more than 16 kinks (the binary-search path).
+        prop_oneof![
+            3 => prop::collection::vec((1u32..=12, -50.0f64..50.0), 1..=5),
+            1 => prop::collection::vec((1u32..=12, -50.0f64..50.0), 17..=30),
+        ],
         0.05f64..2.0,
         0.2f64..3.0,
         1usize..=8,

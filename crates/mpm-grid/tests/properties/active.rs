@@ -70,6 +70,12 @@ proptest! {
         for n in &before {
             prop_assert_eq!(reused.index_of(*n), fresh.index_of(*n));
         }
+        // once warmed up, rebuilding reuses capacity: no reallocation.
+        let warmed = reused.heap_bytes();
+        reused.rebuild(before.iter().copied());
+        reused.rebuild(shuffled.iter().copied());
+        prop_assert_eq!(reused.heap_bytes(), warmed);
+        prop_assert_eq!(fresh.nodes(), reused.nodes());
     }
 
     /// a 1 m × 1 m body anywhere along a 10 km slope activates exactly the nodes it activates

@@ -174,7 +174,7 @@ proptest! {
     /// grid as the exact profile; rejecting it names the first offending point.
     #[test]
     fn snap_moves_points_onto_column_boundaries(
-        case in terrain_case(), offsets in prop::collection::vec(-0.4f64..0.4, 6),
+        case in terrain_case(), offsets in prop::collection::vec(-0.4f64..0.4, 31),
     ) {
         let exact = grid_of(&case, KinkPolicy::Reject);
         let mut moved = case.clone();
