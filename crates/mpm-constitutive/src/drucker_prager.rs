@@ -476,6 +476,7 @@ impl ConstitutiveModel for DruckerPrager {
         &self.elastic
     }
 
+    #[inline]
     fn update(
         &self,
         sigma: &mut SymTensor,
