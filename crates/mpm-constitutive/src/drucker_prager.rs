@@ -126,7 +126,7 @@ pub struct DruckerPragerParams {
     pub dilatancy_angle_deg: f64,
     /// plastic modulus `H = dk/dε̄ᵖ` (Pa); negative values (softening) only while well posed.
     pub hardening_modulus: f64,
-    /// M ∈ [0,1]: 1 isotropic, 0 kinematic
+    /// M ∈ \[0,1\]: 1 isotropic, 0 kinematic
     pub mixing: f64,
     /// how `(α, k0, αg)` are matched to `(c, φ, ψ)`.
     pub cone_match: ConeMatch,
