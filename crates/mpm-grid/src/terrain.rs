@@ -29,7 +29,7 @@
 //! the column's segment k (r_k the rise per column); t = (y − y_g(x))/h, j = ⌊t⌋, b = t − j
 //! (eq 20). Points up to
 //! [`LOCATE_SLACK`](crate::LOCATE_SLACK) cells beyond an edge belong to the edge cell. The profile segment of a column is
-//! found by counting the kinks left of it (binary search beyond 16 kinks), so the grid's memory is
+//! found by counting the kinks left of it (binary search beyond 4 kinks), so the grid's memory is
 //! O(K), not O(columns): a 10 km long grid costs what its profile costs.
 //!
 //! # Gradients
@@ -135,6 +135,9 @@ pub struct TerrainGrid {
     /// segment of a point at u = (x − x0)/l is the number of these ≤ u (the same as the number
     /// ≤ ⌊u⌋, since they are integers).
     kinks: Vec<f64>,
+    /// the same, padded with +∞ to a fixed size when there are at most [`FEW_KINKS`] of them
+    /// (the common case), so that the count is a fixed, branch-free comparison.
+    few_kinks: Option<[f64; FEW_KINKS]>,
     /// columns + LOCATE_SLACK and rows + LOCATE_SLACK: the accepted u and t ranges' upper ends.
     u_max: f64,
     t_max: f64,
@@ -156,9 +159,9 @@ struct GroundLine {
     db_dx: f64,
 }
 
-/// up to this many interior kinks, the segment of a column is found by a branch-free count;
+/// up to this many interior kinks, the segment of a point is found by a fixed branch-free count;
 /// beyond, by binary search.
-const LINEAR_SEARCH_MAX: usize = 16;
+const FEW_KINKS: usize = 4;
 
 /// where a point sits: column i, row j, fractions a = (1+ξ)/2, b = (1+η)/2, and ∂b/∂x.
 #[derive(Clone, Copy, Debug)]
@@ -265,7 +268,13 @@ impl TerrainGrid {
                 db_dx: -slope / h,
             });
         }
-        let kinks = point_column[1..point_column.len() - 1].iter().map(|&c| f64::from(c)).collect();
+        let kinks: Vec<f64> =
+            point_column[1..point_column.len() - 1].iter().map(|&c| f64::from(c)).collect();
+        let few_kinks = (kinks.len() <= FEW_KINKS).then(|| {
+            let mut padded = [f64::INFINITY; FEW_KINKS];
+            padded[..kinks.len()].copy_from_slice(&kinks);
+            padded
+        });
         Ok(Self {
             x0,
             l,
@@ -279,6 +288,7 @@ impl TerrainGrid {
             rise,
             normals,
             kinks,
+            few_kinks,
             lines,
             u_max: columns as f64 + LOCATE_SLACK,
             t_max: rows as f64 + LOCATE_SLACK,
@@ -372,11 +382,10 @@ impl TerrainGrid {
     /// belongs to the segment on its right, like its column.
     #[inline(always)]
     fn line_at(&self, u: f64) -> &GroundLine {
-        let k = if self.kinks.len() <= LINEAR_SEARCH_MAX {
-            // branch-free: independent of the column computation, so both run in parallel.
-            self.kinks.iter().map(|&c| usize::from(c <= u)).sum()
-        } else {
-            self.kinks.partition_point(|&c| c <= u)
+        let k = match &self.few_kinks {
+            // branch-free and independent of the column computation, so both run in parallel.
+            Some(few) => few.iter().map(|&c| usize::from(c <= u)).sum(),
+            None => self.kinks.partition_point(|&c| c <= u),
         };
         &self.lines[k]
     }
