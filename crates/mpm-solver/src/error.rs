@@ -1,0 +1,125 @@
+//! Typed errors of the solver: bad set-up (before any step) and instabilities (during a run).
+//!
+//! An instability names the step, the particle (index and position) and the cause, so that a user can
+//! find the offending region in the last frame written before the failure.
+
+use crate::math::Vector;
+use mpm_constitutive::ConstitutiveError;
+use mpm_grid::LocateError;
+
+/// Which particle field went non-finite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Field {
+    /// Position x_p.
+    Position,
+    /// Velocity v_p.
+    Velocity,
+    /// Stress σ_p.
+    Stress,
+    /// Volume V_p (and so density).
+    Volume,
+}
+
+impl std::fmt::Display for Field {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Field::Position => "position",
+            Field::Velocity => "velocity",
+            Field::Stress => "stress",
+            Field::Volume => "volume",
+        })
+    }
+}
+
+/// Everything that can stop a solver from being built or from taking a step.
+#[derive(Debug, thiserror::Error)]
+pub enum SolverError {
+    /// A configuration value outside its admissible range.
+    #[error("invalid solver setting `{name}` = {value}: {expected}")]
+    InvalidSetting {
+        /// name of the setting
+        name: &'static str,
+        /// the value given
+        value: f64,
+        /// what is admissible
+        expected: &'static str,
+    },
+    /// A particle given to the solver is inconsistent (non-positive mass, unknown material, ...).
+    #[error("particle {particle} at ({x}, {y}): {reason}", x = position.x, y = position.y)]
+    InvalidParticle {
+        /// particle index
+        particle: usize,
+        /// its position
+        position: Vector,
+        /// what is wrong
+        reason: String,
+    },
+    /// The scene has no particles.
+    #[error("the scene has no particles")]
+    NoParticles,
+    /// A particle is outside the grid (at set-up, or it left the grid during the run).
+    #[error("step {step}: particle {particle} at ({x}, {y}) is outside the grid: {cause}", x = position.x, y = position.y)]
+    OutsideGrid {
+        /// step at which it happened (0 = before the first step)
+        step: u64,
+        /// particle index
+        particle: usize,
+        /// its position
+        position: Vector,
+        /// what the grid reported
+        cause: LocateError,
+    },
+    /// A particle field became NaN or infinite.
+    #[error("step {step}: particle {particle} at ({x}, {y}) has a non-finite {field}", x = position.x, y = position.y)]
+    NonFinite {
+        /// step at which it happened
+        step: u64,
+        /// particle index
+        particle: usize,
+        /// its (last finite) position
+        position: Vector,
+        /// which field
+        field: Field,
+    },
+    /// A particle's volume became zero or negative (the material was turned inside out).
+    #[error("step {step}: particle {particle} at ({x}, {y}) inverted: volume ratio 1 + tr Δε = {ratio}", x = position.x, y = position.y)]
+    Inverted {
+        /// step at which it happened
+        step: u64,
+        /// particle index
+        particle: usize,
+        /// its position
+        position: Vector,
+        /// the volume ratio of the increment
+        ratio: f64,
+    },
+    /// With a fixed time step, the Courant number grew above 1 during the run.
+    #[error(
+        "step {step}: Courant number {courant:.3} > 1 at particle {particle} (speed {speed:.3} m/s): \
+         the fixed time step {dt:e} s is too large; use a Courant-controlled step or a smaller dt"
+    )]
+    CourantExceeded {
+        /// step at which it happened
+        step: u64,
+        /// particle that set the limit
+        particle: usize,
+        /// the Courant number reached
+        courant: f64,
+        /// that particle's speed
+        speed: f64,
+        /// the fixed time step
+        dt: f64,
+    },
+    /// The constitutive update refused its input.
+    #[error("step {step}: particle {particle} at ({x}, {y}): {source}", x = position.x, y = position.y)]
+    Constitutive {
+        /// step at which it happened
+        step: u64,
+        /// particle index
+        particle: usize,
+        /// its position
+        position: Vector,
+        /// the model's error
+        source: ConstitutiveError,
+    },
+}

@@ -1,0 +1,142 @@
+//! Material points stored as a struct of arrays.
+//!
+//! Glossary: p particle index; m_p mass (kg per metre of thickness); V_p volume (m³ per metre, i.e. the
+//! area the point stands for); ρ_p = m_p / V_p density; x_p position; v_p velocity; σ_p Cauchy stress,
+//! **tension positive**, full 3D symmetric tensor with σ_zz carried (plane strain).
+//! Each array has one entry per particle; index p refers to the same particle in every array.
+
+use crate::math::{Real, Vector};
+use mpm_constitutive::SymTensor;
+use serde::{Deserialize, Serialize};
+
+/// All particles of a scene. `S` is the constitutive model's internal state (`()` for elasticity).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Particles<S> {
+    /// Current position x_p (m).
+    pub position: Vec<Vector>,
+    /// Current velocity v_p (m/s).
+    pub velocity: Vec<Vector>,
+    /// Mass m_p (kg per metre of thickness); constant.
+    pub mass: Vec<Real>,
+    /// Current volume V_p (m² per metre of thickness), updated by eq 12.
+    pub volume: Vec<Real>,
+    /// Cauchy stress σ_p (Pa, tension positive).
+    pub stress: Vec<SymTensor>,
+    /// Constitutive internal variables.
+    pub state: Vec<S>,
+    /// Index into the solver's material list.
+    pub material: Vec<u16>,
+    /// Body the particle was generated in (for output and runout metrics).
+    pub body: Vec<u16>,
+    /// Position at generation, for displacement output.
+    pub initial_position: Vec<Vector>,
+}
+
+impl<S> Default for Particles<S> {
+    fn default() -> Self {
+        Self {
+            position: Vec::new(),
+            velocity: Vec::new(),
+            mass: Vec::new(),
+            volume: Vec::new(),
+            stress: Vec::new(),
+            state: Vec::new(),
+            material: Vec::new(),
+            body: Vec::new(),
+            initial_position: Vec::new(),
+        }
+    }
+}
+
+/// What a new particle starts with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewParticle<S> {
+    /// Position (m).
+    pub position: Vector,
+    /// Velocity (m/s).
+    pub velocity: Vector,
+    /// Volume (m² per metre).
+    pub volume: Real,
+    /// Density (kg/m³).
+    pub density: Real,
+    /// Initial stress (Pa, tension positive).
+    pub stress: SymTensor,
+    /// Initial internal state.
+    pub state: S,
+    /// Material index.
+    pub material: u16,
+    /// Body index.
+    pub body: u16,
+}
+
+impl<S> Particles<S> {
+    /// an empty set with room for `n` particles.
+    pub fn with_capacity(n: usize) -> Self {
+        Self {
+            position: Vec::with_capacity(n),
+            velocity: Vec::with_capacity(n),
+            mass: Vec::with_capacity(n),
+            volume: Vec::with_capacity(n),
+            stress: Vec::with_capacity(n),
+            state: Vec::with_capacity(n),
+            material: Vec::with_capacity(n),
+            body: Vec::with_capacity(n),
+            initial_position: Vec::with_capacity(n),
+        }
+    }
+
+    /// number of particles.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// true when there is no particle.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// appends one particle; its mass is ρ V.
+    pub fn push(&mut self, p: NewParticle<S>) {
+        self.position.push(p.position);
+        self.velocity.push(p.velocity);
+        self.mass.push(p.density * p.volume);
+        self.volume.push(p.volume);
+        self.stress.push(p.stress);
+        self.state.push(p.state);
+        self.material.push(p.material);
+        self.body.push(p.body);
+        self.initial_position.push(p.position);
+    }
+
+    /// density ρ_p = m_p / V_p of particle `p` (kg/m³).
+    pub fn density(&self, p: usize) -> Real {
+        self.mass[p] / self.volume[p]
+    }
+
+    /// total mass Σ m_p (kg per metre).
+    pub fn total_mass(&self) -> Real {
+        self.mass.iter().sum()
+    }
+
+    /// total linear momentum Σ m_p v_p.
+    pub fn momentum(&self) -> Vector {
+        self.mass.iter().zip(&self.velocity).map(|(&m, &v)| m * v).sum()
+    }
+
+    /// the arrays' lengths agree (a set built by `push` always satisfies this).
+    pub fn is_consistent(&self) -> bool {
+        let n = self.len();
+        [
+            self.velocity.len(),
+            self.mass.len(),
+            self.volume.len(),
+            self.stress.len(),
+            self.state.len(),
+            self.material.len(),
+            self.body.len(),
+            self.initial_position.len(),
+        ]
+        .iter()
+        .all(|&l| l == n)
+    }
+}

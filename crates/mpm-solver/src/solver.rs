@@ -1,0 +1,507 @@
+//! The solver: state owned by the caller's scene, scratch memory owned here, and the step pipeline.
+//!
+//! One step (SPEC §1) runs these stages, each written once in `stages/`:
+//! 1. **time step** (`timestep.rs`): Δt from the Courant number and the fastest signal (eq 13);
+//! 2. **locate** (`locate.rs`): stencils S_ip, G_ip of every particle, the sparse active-node set,
+//!    the node → particle lists that make particle-to-grid sums deterministic, the boundary nodes;
+//! 3. **particle to grid** (`p2g.rs`): nodal mass (eq 1), velocity, internal and external force
+//!    (eqs 2–3), and the MUSL remap of velocity (eq 8);
+//! 4. **grid solve** (`grid.rs`): nodal acceleration (eq 4), small-mass nodes, boundary contact
+//!    (eqs 14–18), Lagrangian velocity v^L (eq 5);
+//! 5. **grid to particle** (`g2p.rs`): particle position and velocity (eqs 6–7);
+//! 6. **stress update** (`stress.rs`): strain increment (eq 9), objective rotation, constitutive
+//!    update (eqs 10–11 or 23–25), density (eq 12).
+//!
+//! A [`Scheme`] only orders stages 3–6 (see [`Solver::step`]).
+
+use std::ops::ControlFlow;
+
+use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_contact::Boundary;
+use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
+use serde::{Deserialize, Serialize};
+
+use crate::config::{Scheme, SolverConfig};
+use crate::energy::{Dissipation, EnergyLedger};
+use crate::error::SolverError;
+use crate::math::{Real, Vector};
+use crate::par;
+use crate::particles::Particles;
+
+/// What one step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Steps completed, including this one.
+    pub step: u64,
+    /// Simulated time at the end of the step (s).
+    pub time: Real,
+    /// The step's Δt (s).
+    pub dt: Real,
+    /// The Courant number Δt·max(c + |v|)/L of the step.
+    pub courant: Real,
+    /// Number of active grid nodes.
+    pub active_nodes: usize,
+    /// Particles whose last constitutive update was plastic on the cone.
+    pub cone_returns: usize,
+    /// Particles whose last constitutive update returned to the apex.
+    pub apex_returns: usize,
+}
+
+/// Why [`Solver::run_until`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunEnd {
+    /// The end time was reached.
+    EndTime,
+    /// The observer asked to stop.
+    Stopped,
+}
+
+/// Receives every step's report and read access to the solver, so that a front end can write
+/// files, draw progress or stop the run, without the solver knowing any file format.
+pub trait Observer<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
+    /// called after each completed step; `Break` stops the run.
+    fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()>;
+}
+
+/// An observer that does nothing (runs to the end time).
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for () {
+    fn after_step(&mut self, _: &Solver<M, S, N>, _: &StepReport) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+}
+
+/// Everything needed to continue a run exactly: particles, clock and accumulated dissipation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint<St> {
+    /// Particle state.
+    pub particles: Particles<St>,
+    /// Simulated time (s).
+    pub time: Real,
+    /// Steps completed.
+    pub step: u64,
+    /// Energy dissipated so far.
+    pub dissipation: Dissipation,
+    /// Stored energy at the start of the run (the ledger's reference).
+    pub initial_stored: Real,
+}
+
+/// A boundary node: its dense index and the (up to three) planes it lies on.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoundaryNode {
+    pub(crate) node: u32,
+    pub(crate) count: u8,
+    pub(crate) planes: [Boundary; 3],
+}
+
+/// Per-step memory, reused between steps (no allocation once the material stops growing).
+#[derive(Debug)]
+pub(crate) struct Scratch<const N: usize> {
+    /// Grid node ids of each particle's stencil.
+    pub(crate) node_ids: Vec<[NodeId; N]>,
+    /// Dense active-node indices of each particle's stencil.
+    pub(crate) node_index: Vec<[u32; N]>,
+    /// S_ip.
+    pub(crate) weights: Vec<[Real; N]>,
+    /// G_ip.
+    pub(crate) gradients: Vec<[Vector; N]>,
+    /// The active nodes.
+    pub(crate) active: ActiveNodes,
+    /// Node → (particle, slot) lists in compressed rows: entries of node i are
+    /// `entry[start[i]..start[i + 1]]`, each `p * N + k`, in increasing particle order.
+    pub(crate) start: Vec<u32>,
+    pub(crate) entry: Vec<u32>,
+    /// Fill cursor of the counting sort that builds `entry`.
+    pub(crate) cursor: Vec<u32>,
+    /// m_i.
+    pub(crate) mass: Vec<Real>,
+    /// v_i (from P2G, then the MUSL remap).
+    pub(crate) velocity: Vec<Vector>,
+    /// f_i = f_i^int + f_i^ext.
+    pub(crate) force: Vec<Vector>,
+    /// a_i after boundary conditions.
+    pub(crate) acceleration: Vec<Vector>,
+    /// v_i^L = v_i + a_i Δt after boundary conditions.
+    pub(crate) velocity_end: Vec<Vector>,
+    /// Nodes on a declared boundary.
+    pub(crate) boundary: Vec<BoundaryNode>,
+    /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
+    pub(crate) saved: Vec<Vector>,
+}
+
+impl<const N: usize> Scratch<N> {
+    fn new() -> Self {
+        Self {
+            node_ids: Vec::new(),
+            node_index: Vec::new(),
+            weights: Vec::new(),
+            gradients: Vec::new(),
+            active: ActiveNodes::new(),
+            start: Vec::new(),
+            entry: Vec::new(),
+            cursor: Vec::new(),
+            mass: Vec::new(),
+            velocity: Vec::new(),
+            force: Vec::new(),
+            acceleration: Vec::new(),
+            velocity_end: Vec::new(),
+            boundary: Vec::new(),
+            saved: Vec::new(),
+        }
+    }
+
+    /// heap bytes held (for memory reports).
+    fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.node_ids.capacity() * size_of::<[NodeId; N]>()
+            + self.node_index.capacity() * size_of::<[u32; N]>()
+            + self.weights.capacity() * size_of::<[Real; N]>()
+            + self.gradients.capacity() * size_of::<[Vector; N]>()
+            + self.active.len() * (size_of::<NodeId>() + 8)
+            + (self.start.capacity() + self.entry.capacity() + self.cursor.capacity())
+                * size_of::<u32>()
+            + self.mass.capacity() * size_of::<Real>()
+            + (self.velocity.capacity()
+                + self.force.capacity()
+                + self.acceleration.capacity()
+                + self.velocity_end.capacity())
+                * size_of::<Vector>()
+            + self.boundary.capacity() * size_of::<BoundaryNode>()
+    }
+}
+
+/// An explicit MPM solver for one scene.
+///
+/// Generic over the constitutive model `M` and the grid with its shape functions `S` (with `N` nodes
+/// per stencil), chosen once per scene: the hot loops contain no dynamic dispatch.
+#[derive(Debug)]
+pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
+    pub(crate) shape: S,
+    pub(crate) materials: Vec<M>,
+    pub(crate) particles: Particles<M::State>,
+    pub(crate) config: SolverConfig,
+    pub(crate) time: Real,
+    pub(crate) step: u64,
+    pub(crate) dissipation: Dissipation,
+    pub(crate) initial_stored: Real,
+    /// Absolute small-mass threshold (kg per metre).
+    pub(crate) small_mass: Real,
+    /// Smallest cell size L of eq 13 (m).
+    pub(crate) cell_size: Real,
+    /// λ + 2G of each material (Pa), for the dilatational wave speed.
+    pub(crate) p_modulus: Vec<Real>,
+    pub(crate) scratch: Scratch<N>,
+    /// Last step's report (zeros before the first step).
+    pub(crate) last: StepReport,
+}
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// builds a solver after validating the settings, the materials and every particle.
+    ///
+    /// Errors name the offending setting or particle; nothing runs until all of it is consistent.
+    pub fn new(
+        shape: S,
+        materials: Vec<M>,
+        particles: Particles<M::State>,
+        config: SolverConfig,
+    ) -> Result<Self, SolverError> {
+        Self::from_checkpoint(
+            shape,
+            materials,
+            config,
+            Checkpoint {
+                particles,
+                time: 0.0,
+                step: 0,
+                dissipation: Dissipation::default(),
+                initial_stored: f64::NAN,
+            },
+        )
+    }
+
+    /// rebuilds a solver that continues exactly from `checkpoint`.
+    pub fn from_checkpoint(
+        shape: S,
+        materials: Vec<M>,
+        config: SolverConfig,
+        checkpoint: Checkpoint<M::State>,
+    ) -> Result<Self, SolverError> {
+        config.validate()?;
+        let particles = checkpoint.particles;
+        if particles.is_empty() {
+            return Err(SolverError::NoParticles);
+        }
+        if materials.is_empty() || materials.len() > usize::from(u16::MAX) + 1 {
+            return Err(SolverError::InvalidSetting {
+                name: "materials",
+                value: materials.len() as f64,
+                expected: "between 1 and 65536 materials",
+            });
+        }
+        validate_particles(&particles, materials.len())?;
+        let mean_mass = particles.total_mass() / particles.len() as Real;
+        let cell_size = shape.min_cell_size();
+        let p_modulus = materials.iter().map(|m| m.elasticity().p_wave_modulus()).collect();
+        let mut solver = Self {
+            shape,
+            materials,
+            particles,
+            config,
+            time: checkpoint.time,
+            step: checkpoint.step,
+            dissipation: checkpoint.dissipation,
+            initial_stored: checkpoint.initial_stored,
+            small_mass: config.small_mass_ratio * mean_mass,
+            cell_size,
+            p_modulus,
+            scratch: Scratch::new(),
+            last: StepReport {
+                step: checkpoint.step,
+                time: checkpoint.time,
+                dt: 0.0,
+                courant: 0.0,
+                active_nodes: 0,
+                cone_returns: 0,
+                apex_returns: 0,
+            },
+        };
+        // Every particle must be inside the grid before the first step; a failure here is
+        // reported at the step already completed (0 for a new run).
+        solver.locate().map_err(|e| match e {
+            SolverError::OutsideGrid { particle, position, cause, .. } => {
+                SolverError::OutsideGrid { step: checkpoint.step, particle, position, cause }
+            }
+            other => other,
+        })?;
+        if solver.initial_stored.is_nan() {
+            let e = solver.energy();
+            solver.initial_stored = e.stored();
+        }
+        Ok(solver)
+    }
+
+    /// the state needed to continue this run exactly.
+    pub fn checkpoint(&self) -> Checkpoint<M::State> {
+        Checkpoint {
+            particles: self.particles.clone(),
+            time: self.time,
+            step: self.step,
+            dissipation: self.dissipation,
+            initial_stored: self.initial_stored,
+        }
+    }
+
+    /// the particles.
+    pub fn particles(&self) -> &Particles<M::State> {
+        &self.particles
+    }
+
+    /// mutable access to the particles (for tests and scripted loading; the next step re-locates them).
+    pub fn particles_mut(&mut self) -> &mut Particles<M::State> {
+        &mut self.particles
+    }
+
+    /// the grid and its shape functions.
+    pub fn shape(&self) -> &S {
+        &self.shape
+    }
+
+    /// the materials, indexed by `Particles::material`.
+    pub fn materials(&self) -> &[M] {
+        &self.materials
+    }
+
+    /// the run's settings.
+    pub fn config(&self) -> &SolverConfig {
+        &self.config
+    }
+
+    /// simulated time (s).
+    pub fn time(&self) -> Real {
+        self.time
+    }
+
+    /// steps completed.
+    pub fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    /// the last step's report.
+    pub fn last_report(&self) -> &StepReport {
+        &self.last
+    }
+
+    /// the active nodes of the last located configuration, in dense order.
+    pub fn active_nodes(&self) -> &[NodeId] {
+        self.scratch.active.nodes()
+    }
+
+    /// Σ_i m_i of the last particle-to-grid transfer: equals Σ_p m_p when the shape functions form
+    /// a partition of unity (a check of mass conservation at the grid).
+    pub fn grid_mass(&self) -> Real {
+        self.scratch.mass.iter().sum()
+    }
+
+    /// heap bytes held by particles and scratch memory.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        let p = &self.particles;
+        p.position.capacity() * size_of::<Vector>() * 3
+            + (p.mass.capacity() + p.volume.capacity()) * size_of::<Real>()
+            + p.stress.capacity() * size_of::<SymTensor>()
+            + p.state.capacity() * size_of::<M::State>()
+            + (p.material.capacity() + p.body.capacity()) * size_of::<u16>()
+            + self.scratch.heap_bytes()
+    }
+
+    /// the energy ledger now (SPEC §5). Costs one pass over the particles.
+    pub fn energy(&self) -> EnergyLedger {
+        let p = &self.particles;
+        let g = self.config.gravity_at(self.time);
+        let kinetic = par::sum(p.len(), |i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
+        let strain = par::sum(p.len(), |i| {
+            let m = &self.materials[usize::from(p.material[i])];
+            p.volume[i] * m.elasticity().strain_energy_density(&p.stress[i])
+        });
+        let potential = par::sum(p.len(), |i| -p.mass[i] * g.dot(p.position[i]));
+        let mut e = EnergyLedger {
+            kinetic,
+            strain,
+            potential,
+            plastic_dissipation: self.dissipation.plastic,
+            friction_work: self.dissipation.friction,
+            constraint_work: self.dissipation.constraint,
+            external_work: self.dissipation.external,
+            residual: 0.0,
+        };
+        e.residual = e.total() - (self.initial_stored + e.external_work);
+        e
+    }
+
+    /// advances one step of the configured scheme.
+    pub fn step(&mut self) -> Result<StepReport, SolverError> {
+        self.step_capped(Real::INFINITY)
+    }
+
+    /// advances one step whose Δt is at most `max_dt` (used to land exactly on an end time).
+    pub fn step_capped(&mut self, max_dt: Real) -> Result<StepReport, SolverError> {
+        let (dt, courant) = self.time_step(max_dt)?;
+        self.locate()?;
+        self.p2g_mass_velocity();
+        let (cone, apex) = match self.config.scheme {
+            Scheme::Usl => {
+                self.p2g_force(dt);
+                self.grid_solve(dt);
+                self.g2p(dt)?;
+                self.update_stress(dt, Velocities::End)?
+            }
+            Scheme::Musl => {
+                self.p2g_force(dt);
+                self.grid_solve(dt);
+                self.g2p(dt)?;
+                self.remap_velocity();
+                self.update_stress(dt, Velocities::Current)?
+            }
+            Scheme::Usf => {
+                self.constrain_velocity();
+                let counts = self.update_stress(dt, Velocities::Current)?;
+                self.unconstrain_velocity();
+                self.p2g_force(dt);
+                self.grid_solve(dt);
+                self.g2p(dt)?;
+                counts
+            }
+            Scheme::Usavg => {
+                self.constrain_velocity();
+                self.update_stress(0.5 * dt, Velocities::Current)?;
+                self.unconstrain_velocity();
+                self.p2g_force(dt);
+                self.grid_solve(dt);
+                self.g2p(dt)?;
+                self.remap_velocity();
+                self.update_stress(0.5 * dt, Velocities::Current)?
+            }
+        };
+        if self.config.gravity_ramp > 0.0 && self.time < self.config.gravity_ramp {
+            let dg = self.config.gravity_at(self.time + dt) - self.config.gravity_at(self.time);
+            let p = &self.particles;
+            self.dissipation.external += par::sum(p.len(), |i| -p.mass[i] * dg.dot(p.position[i]));
+        }
+        self.time += dt;
+        self.step += 1;
+        self.last = StepReport {
+            step: self.step,
+            time: self.time,
+            dt,
+            courant,
+            active_nodes: self.scratch.active.len(),
+            cone_returns: cone,
+            apex_returns: apex,
+        };
+        Ok(self.last)
+    }
+
+    /// steps until `end_time` (the last step is shortened to land on it) or until the observer stops.
+    pub fn run_until(
+        &mut self,
+        end_time: Real,
+        observer: &mut impl Observer<M, S, N>,
+    ) -> Result<RunEnd, SolverError> {
+        // A remainder this small relative to the end time is rounding, not a step to take.
+        const END_SLACK: Real = 1e-12;
+        while self.time < end_time * (1.0 - END_SLACK) {
+            let report = self.step_capped(end_time - self.time)?;
+            if observer.after_step(self, &report).is_break() {
+                return Ok(RunEnd::Stopped);
+            }
+        }
+        Ok(RunEnd::EndTime)
+    }
+}
+
+/// Which nodal velocities the strain increment is computed from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Velocities {
+    /// `scratch.velocity`: the P2G velocity (USF, start of USAVG) or the remapped one (MUSL, end of USAVG).
+    Current,
+    /// `scratch.velocity_end`: the Lagrangian v^L (USL).
+    End,
+}
+
+fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), SolverError> {
+    if !p.is_consistent() {
+        return Err(SolverError::InvalidSetting {
+            name: "particles",
+            value: p.len() as f64,
+            expected: "particle arrays of equal length",
+        });
+    }
+    for i in 0..p.len() {
+        let bad = |reason: String| SolverError::InvalidParticle {
+            particle: i,
+            position: p.position[i],
+            reason,
+        };
+        if !p.position[i].is_finite() {
+            return Err(bad("position is not finite".into()));
+        }
+        if !p.velocity[i].is_finite() {
+            return Err(bad("velocity is not finite".into()));
+        }
+        if !(p.mass[i] > 0.0 && p.mass[i].is_finite()) {
+            return Err(bad(format!("mass {} must be positive and finite", p.mass[i])));
+        }
+        if !(p.volume[i] > 0.0 && p.volume[i].is_finite()) {
+            return Err(bad(format!("volume {} must be positive and finite", p.volume[i])));
+        }
+        if !p.stress[i].is_finite() {
+            return Err(bad("stress is not finite".into()));
+        }
+        if usize::from(p.material[i]) >= materials {
+            return Err(bad(format!(
+                "material index {} but only {materials} material(s) are defined",
+                p.material[i]
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,62 @@
+//! Stage 5: grid to particle.
+//!
+//! x_p ← x_p + Δt Σ_i v_i^L S_ip (eq 6), v_p ← v_p + Δt Σ_i a_i S_ip (eq 7, the FLIP update).
+//! A non-finite result stops the run with the particle that produced it.
+
+use mpm_constitutive::ConstitutiveModel;
+use mpm_grid::ShapeFunctions;
+use rayon::prelude::*;
+
+use crate::error::{Field, SolverError};
+use crate::math::{Real, Vector};
+use crate::solver::Solver;
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    pub(crate) fn g2p(&mut self, dt: Real) -> Result<(), SolverError> {
+        let sc = &self.scratch;
+        let (idx, w) = (&sc.node_index, &sc.weights);
+        let (a, v_end) = (&sc.acceleration, &sc.velocity_end);
+        let step = self.step + 1;
+        let failure = self
+            .particles
+            .position
+            .par_iter_mut()
+            .zip(self.particles.velocity.par_iter_mut())
+            .enumerate()
+            .with_min_len(512)
+            .map(|(p, (x, v))| {
+                let mut dx = Vector::ZERO;
+                let mut dv = Vector::ZERO;
+                for k in 0..N {
+                    let i = idx[p][k] as usize;
+                    dx += w[p][k] * v_end[i];
+                    dv += w[p][k] * a[i];
+                }
+                let (x_new, v_new) = (*x + dt * dx, *v + dt * dv);
+                if !x_new.is_finite() {
+                    return Err(SolverError::NonFinite {
+                        step,
+                        particle: p,
+                        position: *x,
+                        field: Field::Position,
+                    });
+                }
+                if !v_new.is_finite() {
+                    return Err(SolverError::NonFinite {
+                        step,
+                        particle: p,
+                        position: *x,
+                        field: Field::Velocity,
+                    });
+                }
+                *x = x_new;
+                *v = v_new;
+                Ok(())
+            })
+            .find_first(Result::is_err);
+        match failure {
+            Some(Err(e)) => Err(e),
+            _ => Ok(()),
+        }
+    }
+}

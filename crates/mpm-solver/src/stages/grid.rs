@@ -1,0 +1,82 @@
+//! Stage 4: the grid solve.
+//!
+//! a_i = f_i / m_i (eq 4), except at small-mass nodes (m_i below the threshold, §2(3)) where the
+//! internal force is dropped and a_i = f_i^ext / m_i = b; then the boundary conditions of the contact
+//! layer (eqs 14–18) and v_i^L = v_i + a_i Δt (eq 5). The work of each boundary impulse is booked
+//! in the energy ledger, split into its part normal to the node's first boundary (constraint work)
+//! and the rest (friction work).
+
+use mpm_constitutive::ConstitutiveModel;
+use mpm_contact::{apply_all, constrain_velocity_all};
+use mpm_grid::ShapeFunctions;
+use rayon::prelude::*;
+
+use crate::math::Real;
+use crate::solver::Solver;
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// accelerations and end-of-step velocities of every active node, boundary nodes included.
+    pub(crate) fn grid_solve(&mut self, dt: Real) {
+        let sc = &mut self.scratch;
+        let small = self.small_mass;
+        let g = self.config.gravity_at(self.time + 0.5 * dt);
+        sc.acceleration
+            .par_iter_mut()
+            .zip(sc.velocity_end.par_iter_mut())
+            .zip(sc.force.par_iter().zip(sc.mass.par_iter()).zip(sc.velocity.par_iter()))
+            .with_min_len(1024)
+            .for_each(|((a, v_end), ((&f, &m), &v))| {
+                *a = if m > small { f / m } else { g };
+                *v_end = v + *a * dt;
+            });
+
+        let (mut friction, mut constraint) = (0.0, 0.0);
+        for b in &sc.boundary {
+            let i = b.node as usize;
+            let out = apply_all(
+                &b.planes[..usize::from(b.count)],
+                sc.mass[i],
+                sc.velocity[i],
+                sc.acceleration[i],
+                dt,
+            );
+            sc.acceleration[i] = out.acceleration;
+            sc.velocity_end[i] = out.velocity;
+            // Work the boundary impulse J does over the step at the mean nodal velocity: for a node
+            // at rest on the ground it is zero (the reaction does no work), for a sliding node it
+            // is the friction force times the distance slid. Booked as dissipation (≥ 0).
+            let mean_v = 0.5 * (sc.velocity[i] + out.velocity);
+            let n = b.planes[0].normal();
+            let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));
+            constraint -= jn * vn;
+            friction -= out.impulse.dot(mean_v) - jn * vn;
+        }
+        self.dissipation.friction += friction;
+        self.dissipation.constraint += constraint;
+    }
+
+    /// the velocity constraint (eq 18) on `scratch.velocity` at boundary nodes, for a strain
+    /// update. The unconstrained velocities are kept in `scratch.saved` so that
+    /// [`Self::unconstrain_velocity`] can put them back before the grid solve: the grid solve must
+    /// start from the velocity the particles actually carry, so that the contact's removal of an
+    /// approach velocity reaches the particles through the FLIP update (eq 7). Otherwise the same
+    /// approach velocity is stopped again at every step, and turned into strain energy each time.
+    pub(crate) fn constrain_velocity(&mut self) {
+        let sc = &mut self.scratch;
+        sc.saved.clear();
+        for b in &sc.boundary {
+            let i = b.node as usize;
+            sc.saved.push(sc.velocity[i]);
+            sc.velocity[i] =
+                constrain_velocity_all(&b.planes[..usize::from(b.count)], sc.velocity[i]);
+        }
+    }
+
+    /// restores the boundary nodes' velocities saved by [`Self::constrain_velocity`].
+    pub(crate) fn unconstrain_velocity(&mut self) {
+        let sc = &mut self.scratch;
+        for (b, &v) in sc.boundary.iter().zip(&sc.saved) {
+            sc.velocity[b.node as usize] = v;
+        }
+    }
+}

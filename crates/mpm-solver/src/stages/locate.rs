@@ -1,0 +1,123 @@
+//! Stage 2: locate every particle on the grid.
+//!
+//! Evaluates the stencil (nodes, S_ip, G_ip) of every particle, rebuilds the sparse set of active
+//! nodes (only nodes whose support holds a particle exist), numbers each particle's nodes densely,
+//! builds the node → particle lists used by every particle-to-grid sum, and lists the active nodes
+//! that lie on a declared boundary.
+
+use mpm_constitutive::ConstitutiveModel;
+use mpm_contact::Boundary;
+use mpm_grid::ShapeFunctions;
+use rayon::prelude::*;
+
+use crate::error::SolverError;
+use crate::math::Vector;
+use crate::solver::{BoundaryNode, Solver};
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    pub(crate) fn locate(&mut self) -> Result<(), SolverError> {
+        let n = self.particles.len();
+        let sc = &mut self.scratch;
+        sc.node_ids.resize(n, [Default::default(); N]);
+        sc.node_index.resize(n, [0; N]);
+        sc.weights.resize(n, [0.0; N]);
+        sc.gradients.resize(n, [Vector::ZERO; N]);
+
+        let shape = &self.shape;
+        let positions = &self.particles.position;
+        let failure = sc
+            .node_ids
+            .par_iter_mut()
+            .zip(sc.weights.par_iter_mut())
+            .zip(sc.gradients.par_iter_mut())
+            .enumerate()
+            .map(|(p, ((ids, w), g))| match shape.stencil(positions[p]) {
+                Ok(s) => {
+                    *ids = s.nodes;
+                    *w = s.weights;
+                    *g = s.gradients;
+                    Ok(())
+                }
+                Err(cause) => Err((p, cause)),
+            })
+            .find_first(Result::is_err);
+        if let Some(Err((particle, cause))) = failure {
+            return Err(SolverError::OutsideGrid {
+                step: self.step + 1,
+                particle,
+                position: positions[particle],
+                cause,
+            });
+        }
+
+        sc.active.rebuild(sc.node_ids.iter().flatten().copied());
+        let active = &sc.active;
+        sc.node_index.par_iter_mut().zip(sc.node_ids.par_iter()).for_each(|(idx, ids)| {
+            for k in 0..N {
+                // Every stencil node was inserted by the rebuild just above.
+                idx[k] = active.index_of(ids[k]).map_or(u32::MAX, |i| i as u32);
+            }
+        });
+
+        // Node → (particle, slot) lists by a counting sort in particle order: deterministic.
+        let nodes = active.len();
+        sc.start.clear();
+        sc.start.resize(nodes + 1, 0);
+        for idx in &sc.node_index {
+            for &i in idx {
+                sc.start[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..nodes {
+            sc.start[i + 1] += sc.start[i];
+        }
+        sc.entry.resize(n * N, 0);
+        // The running fill position of each node's list.
+        sc.cursor.clear();
+        sc.cursor.extend_from_slice(&sc.start[..nodes]);
+        for (p, idx) in sc.node_index.iter().enumerate() {
+            for (k, &i) in idx.iter().enumerate() {
+                let c = &mut sc.cursor[i as usize];
+                sc.entry[*c as usize] = (p * N + k) as u32;
+                *c += 1;
+            }
+        }
+
+        for v in [&mut sc.velocity, &mut sc.force, &mut sc.acceleration, &mut sc.velocity_end] {
+            v.resize(nodes, Vector::ZERO);
+        }
+        sc.mass.resize(nodes, 0.0);
+
+        sc.boundary.clear();
+        let b = self.config.boundaries;
+        if b.any() {
+            for (i, &node) in active.nodes().iter().enumerate() {
+                let normals = shape.boundary_normals(node);
+                let mut planes: [Option<Boundary>; 3] = [None; 3];
+                let mut count = 0;
+                for (law, normal) in [
+                    (b.ground, normals.ground),
+                    (b.left_wall, normals.left_wall),
+                    (b.right_wall, normals.right_wall),
+                ] {
+                    if let (Some(law), Some(normal)) = (law, normal) {
+                        // The grid hands out unit normals and the friction law was validated
+                        // with the scene, so construction cannot fail here.
+                        if let Ok(plane) = Boundary::new(normal, law) {
+                            planes[count] = Some(plane);
+                            count += 1;
+                        }
+                    }
+                }
+                if let Some(first) = planes[0] {
+                    sc.boundary.push(BoundaryNode {
+                        node: i as u32,
+                        count: count as u8,
+                        planes: planes.map(|b| b.unwrap_or(first)),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}

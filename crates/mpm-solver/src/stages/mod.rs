@@ -1,0 +1,8 @@
+//! The stages of one step, each an `impl` block on [`crate::Solver`] in its own file.
+
+mod g2p;
+mod grid;
+mod locate;
+mod p2g;
+mod stress;
+mod timestep;

@@ -1,0 +1,82 @@
+//! Stage 3: particle-to-grid sums.
+//!
+//! m_i = Σ_p m_p S_ip (eq 1); q_i = Σ_p m_p v_p S_ip and v_i = q_i / m_i;
+//! f_i = −Σ_p V_p σ_p · G_ip (eq 2) + Σ_p m_p S_ip b (eq 3, b = gravity).
+//! Each node sums its own (particle, slot) list in increasing particle order, in parallel over nodes,
+//! so the sums are bit-identical for any number of threads.
+
+use mpm_constitutive::ConstitutiveModel;
+use mpm_grid::ShapeFunctions;
+use rayon::prelude::*;
+
+use crate::math::{Real, Vector};
+use crate::solver::Solver;
+
+/// For every node i: out[i] = Σ over its entries e of `term(p, k)` with e = p·N + k.
+fn gather<T, const N: usize>(
+    start: &[u32],
+    entry: &[u32],
+    out: &mut [T],
+    term: impl Fn(usize, usize) -> T + Sync,
+) where
+    T: Send + Copy + Default + std::ops::AddAssign,
+{
+    out.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, o)| {
+        let mut acc = T::default();
+        for &e in &entry[start[i] as usize..start[i + 1] as usize] {
+            let e = e as usize;
+            acc += term(e / N, e % N);
+        }
+        *o = acc;
+    });
+}
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// nodal mass (eq 1) and velocity q_i / m_i into `scratch.mass` and `scratch.velocity`.
+    pub(crate) fn p2g_mass_velocity(&mut self) {
+        let sc = &mut self.scratch;
+        let p = &self.particles;
+        let w = &sc.weights;
+        gather::<_, N>(&sc.start, &sc.entry, &mut sc.mass, |q, k| p.mass[q] * w[q][k]);
+        gather::<_, N>(&sc.start, &sc.entry, &mut sc.velocity, |q, k| {
+            (p.mass[q] * w[q][k]) * p.velocity[q]
+        });
+        divide_by_mass(&sc.mass, &mut sc.velocity);
+    }
+
+    /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
+    /// old stencils, then the boundary velocity constraint (eq 18).
+    pub(crate) fn remap_velocity(&mut self) {
+        let sc = &mut self.scratch;
+        let p = &self.particles;
+        let w = &sc.weights;
+        gather::<_, N>(&sc.start, &sc.entry, &mut sc.velocity, |q, k| {
+            (p.mass[q] * w[q][k]) * p.velocity[q]
+        });
+        divide_by_mass(&sc.mass, &mut sc.velocity);
+        self.constrain_velocity();
+    }
+
+    /// nodal force f_i^int + f_i^ext (eqs 2–3) into `scratch.force`.
+    pub(crate) fn p2g_force(&mut self, dt: Real) {
+        let sc = &mut self.scratch;
+        let p = &self.particles;
+        let (w, grad) = (&sc.weights, &sc.gradients);
+        // Gravity at mid-step (it only changes during a ramp).
+        let g = self.config.gravity_at(self.time + 0.5 * dt);
+        gather::<_, N>(&sc.start, &sc.entry, &mut sc.force, |q, k| {
+            let s = &p.stress[q];
+            let gr = grad[q][k];
+            // σ·G in the plane (tension positive, so −V σ·G pulls nodes towards stretched regions).
+            let sigma_g = Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
+            (p.mass[q] * w[q][k]) * g - p.volume[q] * sigma_g
+        });
+    }
+}
+
+/// v_i ← q_i / m_i; a node with no mass (only zero weights) gets zero velocity.
+fn divide_by_mass(mass: &[f64], velocity: &mut [Vector]) {
+    velocity.par_iter_mut().zip(mass.par_iter()).with_min_len(1024).for_each(|(v, &m)| {
+        *v = if m > 0.0 { *v / m } else { Vector::ZERO };
+    });
+}
