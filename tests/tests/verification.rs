@@ -1,0 +1,9 @@
+//! Verification of the solver against analytic answers: the paper's cases (Abe et al. 2005) and the
+//! standard MPM benchmarks. One module per source; each test is named after the case it reproduces.
+
+mod verification {
+    pub mod abe2005;
+    pub mod bardenhagen2002;
+    pub mod guards;
+    pub mod objectivity;
+}
