@@ -1,0 +1,101 @@
+//! Whole-step benchmarks: an elastic block and a Drucker-Prager sand column, bilinear shape
+//! functions on a regular grid, MUSL, at 10 k, 100 k and 1 M particles.
+//!
+//! Criterion reports time per step; throughput is set to the particle count, so the "elements/s"
+//! figure is particle-steps per second. Thread count follows RAYON_NUM_THREADS (run once with 1 and
+//! once with 2 to read the speed-up). The heap bytes per particle are printed once per size.
+
+// criterion's macros generate public functions that cannot carry docs.
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use mpm_constitutive::{
+    ConeMatch, ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic, SymTensor,
+};
+use mpm_contact::Friction;
+use mpm_grid::{Bilinear, RegularGrid};
+use mpm_solver::generate::{Shape, fill};
+use mpm_solver::{Boundaries, NewParticle, Particles, Scheme, Solver, SolverConfig, Vector};
+
+/// A square body of about `n` particles (2 × 2 per cell) resting on a frictional floor.
+fn scene<M: ConstitutiveModel>(n: usize, model: M) -> Solver<M, Bilinear<RegularGrid>, 4> {
+    let cells_side = ((n / 4) as f64).sqrt().round() as usize;
+    let cell = 1.0 / cells_side as f64;
+    let grid = RegularGrid::new(
+        Vector::new(-0.5, 0.0),
+        Vector::splat(cell),
+        [2 * cells_side, 2 * cells_side],
+    )
+    .unwrap();
+    let state = model.initial_state();
+    let mut particles = Particles::with_capacity(n);
+    for s in fill(&Shape::Rectangle { min: Vector::ZERO, max: Vector::ONE }, cell / 2.0) {
+        particles.push(NewParticle {
+            position: s.position,
+            velocity: Vector::ZERO,
+            volume: s.area,
+            density: 1600.0,
+            stress: SymTensor::ZERO,
+            state,
+            material: 0,
+            body: 0,
+        });
+    }
+    let config = SolverConfig {
+        scheme: Scheme::Musl,
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: 0.5 }),
+            ..Default::default()
+        },
+        objective_stress: M::IS_PLASTIC,
+        ..Default::default()
+    };
+    Solver::new(Bilinear(grid), vec![model], particles, config).unwrap()
+}
+
+fn sand() -> DruckerPrager {
+    DruckerPrager::new(DruckerPragerParams {
+        young: 2e6,
+        poisson: 0.3,
+        cohesion: 10.0,
+        friction_angle_deg: 40.0,
+        dilatancy_angle_deg: 0.0,
+        hardening_modulus: 0.0,
+        mixing: 0.8,
+        cone_match: ConeMatch::PlaneStrain,
+    })
+    .unwrap()
+}
+
+fn bench_model<M: ConstitutiveModel + Clone>(c: &mut Criterion, name: &str, model: M) {
+    let mut group = c.benchmark_group(format!("step/{name}"));
+    group.sample_size(10);
+    for n in [10_000usize, 100_000, 1_000_000] {
+        let mut solver = scene(n, model.clone());
+        // Settle the first transients and warm the scratch memory.
+        for _ in 0..3 {
+            solver.step().unwrap();
+        }
+        let np = solver.particles().len();
+        eprintln!(
+            "{name}: {np} particles, {} active nodes, {:.0} heap bytes per particle",
+            solver.active_nodes().len(),
+            solver.heap_bytes() as f64 / np as f64
+        );
+        group.throughput(Throughput::Elements(np as u64));
+        group.bench_function(BenchmarkId::from_parameter(np), |b| {
+            b.iter(|| black_box(solver.step().unwrap()))
+        });
+    }
+    group.finish();
+}
+
+fn steps(c: &mut Criterion) {
+    bench_model(c, "elastic", LinearElastic::from_young_poisson(2e6, 0.3).unwrap());
+    bench_model(c, "drucker_prager", sand());
+}
+
+criterion_group!(benches, steps);
+criterion_main!(benches);
