@@ -110,18 +110,15 @@ pub(crate) struct Scratch<const N: usize> {
     /// `entry[start[i]..start[i + 1]]`, each `p * N + k`, in increasing particle order.
     pub(crate) start: Vec<u32>,
     pub(crate) entry: Vec<u32>,
-    /// Fill cursor of the counting sort that builds `entry`.
-    pub(crate) cursor: Vec<u32>,
     /// m_i.
     pub(crate) mass: Vec<Real>,
     /// v_i (from P2G, then the MUSL remap).
     pub(crate) velocity: Vec<Vector>,
     /// f_i = f_i^int + f_i^ext.
     pub(crate) force: Vec<Vector>,
-    /// a_i after boundary conditions.
+    /// a_i after boundary conditions. The end-of-step velocity is never stored: it is
+    /// v_i^L = v_i + a_i Δt (eq 5), an identity the contact layer keeps at boundary nodes too.
     pub(crate) acceleration: Vec<Vector>,
-    /// v_i^L = v_i + a_i Δt after boundary conditions.
-    pub(crate) velocity_end: Vec<Vector>,
     /// Nodes on a declared boundary.
     pub(crate) boundary: Vec<BoundaryNode>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -138,12 +135,10 @@ impl<const N: usize> Scratch<N> {
             active: ActiveNodes::new(),
             start: Vec::new(),
             entry: Vec::new(),
-            cursor: Vec::new(),
             mass: Vec::new(),
             velocity: Vec::new(),
             force: Vec::new(),
             acceleration: Vec::new(),
-            velocity_end: Vec::new(),
             boundary: Vec::new(),
             saved: Vec::new(),
         }
@@ -157,13 +152,9 @@ impl<const N: usize> Scratch<N> {
             + self.weights.capacity() * size_of::<[Real; N]>()
             + self.gradients.capacity() * size_of::<[Vector; N]>()
             + self.active.len() * (size_of::<NodeId>() + 8)
-            + (self.start.capacity() + self.entry.capacity() + self.cursor.capacity())
-                * size_of::<u32>()
+            + (self.start.capacity() + self.entry.capacity()) * size_of::<u32>()
             + self.mass.capacity() * size_of::<Real>()
-            + (self.velocity.capacity()
-                + self.force.capacity()
-                + self.acceleration.capacity()
-                + self.velocity_end.capacity())
+            + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
     }
@@ -392,18 +383,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
-                self.update_stress(dt, Velocities::End)?
+                self.advance_velocity(dt);
+                self.update_stress(dt)?
             }
             Scheme::Musl => {
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity();
-                self.update_stress(dt, Velocities::Current)?
+                self.update_stress(dt)?
             }
             Scheme::Usf => {
                 self.constrain_velocity();
-                let counts = self.update_stress(dt, Velocities::Current)?;
+                let counts = self.update_stress(dt)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
                 self.grid_solve(dt);
@@ -412,13 +404,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             }
             Scheme::Usavg => {
                 self.constrain_velocity();
-                self.update_stress(0.5 * dt, Velocities::Current)?;
+                self.update_stress(0.5 * dt)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity();
-                self.update_stress(0.5 * dt, Velocities::Current)?
+                self.update_stress(0.5 * dt)?
             }
         };
         if self.config.gravity_ramp > 0.0 && self.time < self.config.gravity_ramp {
@@ -456,15 +448,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         Ok(RunEnd::EndTime)
     }
-}
-
-/// Which nodal velocities the strain increment is computed from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Velocities {
-    /// `scratch.velocity`: the P2G velocity (USF, start of USAVG) or the remapped one (MUSL, end of USAVG).
-    Current,
-    /// `scratch.velocity_end`: the Lagrangian v^L (USL).
-    End,
 }
 
 fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), SolverError> {

@@ -15,7 +15,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     pub(crate) fn g2p(&mut self, dt: Real) -> Result<(), SolverError> {
         let sc = &self.scratch;
         let (idx, w) = (&sc.node_index, &sc.weights);
-        let (a, v_end) = (&sc.acceleration, &sc.velocity_end);
+        let (a, v) = (&sc.acceleration, &sc.velocity);
         let step = self.step + 1;
         let failure = self
             .particles
@@ -24,15 +24,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .zip(self.particles.velocity.par_iter_mut())
             .enumerate()
             .with_min_len(512)
-            .map(|(p, (x, v))| {
+            .map(|(p, (x, vp))| {
                 let mut dx = Vector::ZERO;
                 let mut dv = Vector::ZERO;
                 for k in 0..N {
                     let i = idx[p][k] as usize;
-                    dx += w[p][k] * v_end[i];
+                    // v_i^L = v_i + a_i Δt (eq 5)
+                    dx += w[p][k] * (v[i] + a[i] * dt);
                     dv += w[p][k] * a[i];
                 }
-                let (x_new, v_new) = (*x + dt * dx, *v + dt * dv);
+                let (x_new, v_new) = (*x + dt * dx, *vp + dt * dv);
                 if !x_new.is_finite() {
                     return Err(SolverError::NonFinite {
                         step,
@@ -50,7 +51,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     });
                 }
                 *x = x_new;
-                *v = v_new;
+                *vp = v_new;
                 Ok(())
             })
             .find_first(Result::is_err);

@@ -2,7 +2,7 @@
 //!
 //! a_i = f_i / m_i (eq 4), except at small-mass nodes (m_i below the threshold, §2(3)) where the
 //! internal force is dropped and a_i = f_i^ext / m_i = b; then the boundary conditions of the contact
-//! layer (eqs 14–18) and v_i^L = v_i + a_i Δt (eq 5). The work of each boundary impulse is booked
+//! layer (eqs 14–18), which keep v_i^L = v_i + a_i Δt (eq 5) so that v^L need not be stored. The work of each boundary impulse is booked
 //! in the energy ledger, split into its part normal to the node's first boundary (constraint work)
 //! and the rest (friction work).
 
@@ -22,12 +22,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let g = self.config.gravity_at(self.time + 0.5 * dt);
         sc.acceleration
             .par_iter_mut()
-            .zip(sc.velocity_end.par_iter_mut())
-            .zip(sc.force.par_iter().zip(sc.mass.par_iter()).zip(sc.velocity.par_iter()))
+            .zip(sc.force.par_iter().zip(sc.mass.par_iter()))
             .with_min_len(1024)
-            .for_each(|((a, v_end), ((&f, &m), &v))| {
+            .for_each(|(a, (&f, &m))| {
                 *a = if m > small { f / m } else { g };
-                *v_end = v + *a * dt;
             });
 
         let (mut friction, mut constraint) = (0.0, 0.0);
@@ -41,7 +39,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 dt,
             );
             sc.acceleration[i] = out.acceleration;
-            sc.velocity_end[i] = out.velocity;
             // Work the boundary impulse J does over the step at the mean nodal velocity: for a node
             // at rest on the ground it is zero (the reaction does no work), for a sliding node it
             // is the friction force times the distance slid. Booked as dissipation (≥ 0).
@@ -53,6 +50,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         self.dissipation.friction += friction;
         self.dissipation.constraint += constraint;
+    }
+
+    /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
+    pub(crate) fn advance_velocity(&mut self, dt: Real) {
+        let sc = &mut self.scratch;
+        sc.velocity.par_iter_mut().zip(sc.acceleration.par_iter()).with_min_len(1024).for_each(
+            |(v, &a)| {
+                *v += a * dt;
+            },
+        );
     }
 
     /// the velocity constraint (eq 18) on `scratch.velocity` at boundary nodes, for a strain

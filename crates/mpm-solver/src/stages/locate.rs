@@ -71,19 +71,24 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         for i in 0..nodes {
             sc.start[i + 1] += sc.start[i];
         }
+        // `start[i + 1]` is now the end of node i's list. Filling from the last entry backwards
+        // and decrementing that end leaves each list in increasing particle order, and leaves
+        // `start[i + 1]` holding the start of list i; one shift then puts every start in place.
         sc.entry.resize(n * N, 0);
-        // The running fill position of each node's list.
-        sc.cursor.clear();
-        sc.cursor.extend_from_slice(&sc.start[..nodes]);
-        for (p, idx) in sc.node_index.iter().enumerate() {
-            for (k, &i) in idx.iter().enumerate() {
-                let c = &mut sc.cursor[i as usize];
-                sc.entry[*c as usize] = (p * N + k) as u32;
-                *c += 1;
+        {
+            let ends = &mut sc.start[1..];
+            for (p, idx) in sc.node_index.iter().enumerate().rev() {
+                for (k, &i) in idx.iter().enumerate().rev() {
+                    let e = &mut ends[i as usize];
+                    *e -= 1;
+                    sc.entry[*e as usize] = (p * N + k) as u32;
+                }
             }
         }
+        sc.start.copy_within(1..=nodes, 0);
+        sc.start[nodes] = (n * N) as u32;
 
-        for v in [&mut sc.velocity, &mut sc.force, &mut sc.acceleration, &mut sc.velocity_end] {
+        for v in [&mut sc.velocity, &mut sc.force, &mut sc.acceleration] {
             v.resize(nodes, Vector::ZERO);
         }
         sc.mass.resize(nodes, 0.0);

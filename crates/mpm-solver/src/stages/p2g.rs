@@ -37,11 +37,24 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &mut self.scratch;
         let p = &self.particles;
         let w = &sc.weights;
-        gather::<_, N>(&sc.start, &sc.entry, &mut sc.mass, |q, k| p.mass[q] * w[q][k]);
-        gather::<_, N>(&sc.start, &sc.entry, &mut sc.velocity, |q, k| {
-            (p.mass[q] * w[q][k]) * p.velocity[q]
-        });
-        divide_by_mass(&sc.mass, &mut sc.velocity);
+        let (start, entry) = (&sc.start, &sc.entry);
+        // One pass over each node's list for both sums (same order as `gather`).
+        sc.mass
+            .par_iter_mut()
+            .zip(sc.velocity.par_iter_mut())
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (m, v))| {
+                let (mut ms, mut q) = (0.0, Vector::ZERO);
+                for &e in &entry[start[i] as usize..start[i + 1] as usize] {
+                    let (pi, k) = (e as usize / N, e as usize % N);
+                    let mw = p.mass[pi] * w[pi][k];
+                    ms += mw;
+                    q += mw * p.velocity[pi];
+                }
+                *m = ms;
+                *v = if ms > 0.0 { q / ms } else { Vector::ZERO };
+            });
     }
 
     /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the

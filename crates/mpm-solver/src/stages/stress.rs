@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use crate::error::{Field, SolverError};
 use crate::math::{Matrix, Real, Vector};
 use crate::par::CHUNK;
-use crate::solver::{Solver, Velocities};
+use crate::solver::Solver;
 
 /// What one chunk of particles reports back.
 #[derive(Default)]
@@ -27,18 +27,12 @@ struct ChunkTally {
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
-    /// updates every particle's stress, state and volume over `dt` from the chosen nodal
-    /// velocities; returns the numbers of cone and apex returns.
-    pub(crate) fn update_stress(
-        &mut self,
-        dt: Real,
-        source: Velocities,
-    ) -> Result<(usize, usize), SolverError> {
+    /// updates every particle's stress, state and volume over `dt` from the nodal velocities in
+    /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns the numbers of
+    /// cone and apex returns.
+    pub(crate) fn update_stress(&mut self, dt: Real) -> Result<(usize, usize), SolverError> {
         let sc = &self.scratch;
-        let nodal = match source {
-            Velocities::Current => &sc.velocity,
-            Velocities::End => &sc.velocity_end,
-        };
+        let nodal = &sc.velocity;
         let (idx, grad) = (&sc.node_index, &sc.gradients);
         let materials = &self.materials;
         let objective = self.config.objective_stress;
@@ -131,7 +125,7 @@ mod tests {
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
-    use crate::solver::{Solver, Velocities};
+    use crate::solver::Solver;
     use crate::{SolverConfig, Vector};
 
     /// A single stressed particle whose nodes carry the rigid rotation v = Ω ẑ × (x − c): with the
@@ -166,7 +160,7 @@ mod tests {
         let steps = 1000;
         let dt = std::f64::consts::FRAC_PI_2 / omega / steps as f64;
         for _ in 0..steps {
-            s.update_stress(dt, Velocities::Current).unwrap();
+            s.update_stress(dt).unwrap();
         }
         (sigma0, s.particles.stress[0])
     }
