@@ -1,86 +1,27 @@
 //! The 1D vibrating bar (fixed–free), a standard MPM benchmark used by Bardenhagen (2002) and by
 //! most MPM codes since: v(x, 0) = v0 sin(βx), β = π/(2L), ω = β √(E/ρ), period T = 2π/ω.
-//! With L = 25, E = 100, ρ = 1: c = 10 and T = 4L/c = 10 s.
+//! With L = 25, E = 100, ρ = 1: c = 10 and T = 4L/c = 10 s. The driver lives in the `mpm-tests`
+//! library ([`mpm_tests::vibrating_bar`]), shared with `cargo xtask verify`.
 
-use mpm_constitutive::LinearElastic;
-use mpm_contact::Friction;
-use mpm_grid::{Bilinear, QuadraticBSpline, RegularGrid, ShapeFunctions};
-use mpm_solver::generate::Shape;
-use mpm_solver::{Boundaries, Scheme, Solver, SolverConfig, Vector};
-use mpm_tests::{block, mass_mean};
+use mpm_solver::Scheme;
+use mpm_tests::{Discretisation, ShapeKind, bar, vibrating_bar as run_bar};
 
-const L: f64 = 25.0;
-const E: f64 = 100.0;
-const RHO: f64 = 1.0;
-const V0: f64 = 0.1;
-
-/// (measured period, largest |E(t) − E0|/E0) over five periods.
+/// (measured period / exact period, largest |E(t) − E0|/E0) over five periods, 2 × 2 particles
+/// per cell.
 fn vibrating_bar(scheme: Scheme, cell: f64, courant: f64, smooth: bool) -> (f64, f64) {
-    let grid = RegularGrid::new(
-        Vector::new(0.0, -1.0),
-        Vector::splat(cell),
-        [(28.0 / cell) as usize, (3.0 / cell) as usize],
-    )
-    .unwrap();
-    if smooth {
-        bar_on(QuadraticBSpline::new(grid), scheme, cell, courant)
-    } else {
-        bar_on(Bilinear(grid), scheme, cell, courant)
-    }
-}
-
-fn bar_on<S: ShapeFunctions<N>, const N: usize>(
-    shape: S,
-    scheme: Scheme,
-    cell: f64,
-    courant: f64,
-) -> (f64, f64) {
-    let beta = std::f64::consts::PI / (2.0 * L);
-    let period = 2.0 * std::f64::consts::PI / (beta * (E / RHO).sqrt());
-    // ν = 0: plane strain then has no lateral coupling and the bar is one-dimensional.
-    let material = LinearElastic::from_young_poisson(E, 0.0).unwrap();
-    let mut particles = block(
-        &Shape::Rectangle { min: Vector::ZERO, max: Vector::new(L, cell) },
-        cell,
-        2,
-        RHO,
-        Vector::ZERO,
-        (),
-    );
-    for i in 0..particles.len() {
-        particles.velocity[i] = Vector::new(V0 * (beta * particles.position[i].x).sin(), 0.0);
-    }
-    let config = SolverConfig {
-        scheme,
-        time_step: mpm_solver::TimeStep::Courant(courant),
-        gravity: Vector::ZERO,
-        boundaries: Boundaries { left_wall: Some(Friction::Fixed), ..Default::default() },
-        ..Default::default()
-    };
-    let mut s = Solver::new(shape, vec![material], particles, config).unwrap();
-    let e0 = s.energy().total();
-    let mut worst: f64 = 0.0;
-    let mut crossings = Vec::new();
-    let mut last = (0.0, mass_mean(s.particles(), &s.particles().velocity).x);
-    while s.time() < 5.0 * period {
-        s.step().unwrap();
-        let v = mass_mean(s.particles(), &s.particles().velocity).x;
-        if (v > 0.0) != (last.1 > 0.0) {
-            // Linear interpolation of the zero of the mean velocity within the step.
-            crossings.push(last.0 + (s.time() - last.0) * last.1 / (last.1 - v));
-        }
-        last = (s.time(), v);
-        worst = worst.max((s.energy().total() - e0).abs() / e0);
-    }
-    // Successive zero crossings of cos(ωt) are half a period apart.
-    let n = crossings.len();
-    let measured = 2.0 * (crossings[n - 1] - crossings[0]) / (n - 1) as f64;
+    let shape = if smooth { ShapeKind::BSpline } else { ShapeKind::Bilinear };
+    let d = Discretisation { cell, ppc: 2, scheme, shape, courant };
+    let r = run_bar(&d).unwrap();
     eprintln!(
-        "vibrating bar {} N = {N} cell {cell} C {courant}: period {measured:.4} s (exact {period:.4}), worst |ΔE|/E0 {worst:.3e}",
-        scheme.name()
+        "vibrating bar {} {} cell {cell} C {courant}: period {:.4} s (exact {:.4}), worst |ΔE|/E0 {:.3e}",
+        scheme.name(),
+        shape.name(),
+        r.period_ratio * bar::period(),
+        bar::period(),
+        r.worst_energy
     );
-    assert!(n >= 9, "expected ten zero crossings in five periods, got {n}");
-    (measured / period, worst)
+    assert!(r.crossings >= 9, "expected ten zero crossings in five periods, got {}", r.crossings);
+    (r.period_ratio, r.worst_energy)
 }
 
 /// Bilinear functions on the standard 25-cell bar. C = 0.05: at C = 0.1 MUSL's energy error is

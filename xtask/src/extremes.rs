@@ -1,0 +1,526 @@
+//! `cargo xtask extremes`: scenes at the edges of the admissible settings.
+//!
+//! Every row states its expected outcome before it runs:
+//! - **completes**: the run reaches its end time, every particle field and every energy stays
+//!   finite, and the energy growth stays within the row's bound (1 % unless the row says
+//!   otherwise and why);
+//! - **stops with `X`**: the solver returns the designed, named error `X` (a refused setting
+//!   before any step, or an instability caught at its particle).
+//!
+//! A row fails on a panic (caught per row), a NaN, or any other outcome than the expected one; a
+//! failed row makes the command exit non-zero.
+//!
+//! Energy growth is measured against the energy the run can move around: at every step,
+//! residual(t) / (KE₀ + strain₀ + Σ m_p |g| h_p + released(t)), where h_p is the height of particle
+//! p above the ground below it at the start and released(t) the largest drop of gravitational
+//! potential energy so far. The residual is the ledger's (stored + dissipated) − (initial + external
+//! work): positive when the integrator creates energy.
+
+use std::fmt::Write as _;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::Instant;
+
+use anyhow::Result;
+use mpm_constitutive::{ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic};
+use mpm_contact::Friction;
+use mpm_grid::{Bilinear, KinkPolicy, RegularGrid, ShapeFunctions, TerrainGrid, TerrainGridSpec};
+use mpm_solver::generate::Shape;
+use mpm_solver::{
+    Boundaries, NewParticle, Particles, Solver, SolverConfig, SolverError, TimeStep, Vector,
+};
+use mpm_tests::block;
+
+use crate::table::{Status, Table, num, pct};
+
+/// The issue's bound on energy growth for a run that completes.
+const ENERGY_BOUND: f64 = 0.01;
+/// Most steps a row may take (keeps the command at a few minutes); end times are shortened to fit.
+const MAX_STEPS: f64 = 30_000.0;
+
+/// What a row expects.
+#[derive(Clone, Copy, Debug)]
+enum Expect {
+    /// reaches the end time, finite, energy growth ≤ `bound` (None: growth reported, not bounded,
+    /// for the reason given in the row's note).
+    Complete { bound: Option<f64> },
+    /// stops with this `SolverError` variant.
+    Stops(&'static str),
+}
+
+/// What a completed run measured.
+#[derive(Clone, Copy, Debug, Default)]
+struct Measured {
+    steps: u64,
+    time: f64,
+    growth: f64,
+    apex: u64,
+    finite: bool,
+}
+
+/// One scene.
+struct Row {
+    name: String,
+    setting: String,
+    expect: Expect,
+    note: &'static str,
+    run: Box<dyn Fn() -> Result<Measured, RowError>>,
+}
+
+/// Why a row did not complete.
+#[derive(Debug)]
+enum RowError {
+    /// the extremes' own scene could not be built (always unexpected).
+    Setup(String),
+    /// the solver refused or stopped.
+    Solver(SolverError),
+}
+
+impl From<SolverError> for RowError {
+    fn from(e: SolverError) -> Self {
+        RowError::Solver(e)
+    }
+}
+
+impl std::fmt::Display for RowError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RowError::Setup(s) => write!(f, "scene set-up failed: {s}"),
+            RowError::Solver(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+fn variant(e: &RowError) -> &'static str {
+    let RowError::Solver(e) = e else { return "set-up error" };
+    match e {
+        SolverError::InvalidSetting { .. } => "InvalidSetting",
+        SolverError::InvalidParticle { .. } => "InvalidParticle",
+        SolverError::NoParticles => "NoParticles",
+        SolverError::OutsideGrid { .. } => "OutsideGrid",
+        SolverError::NonFinite { .. } => "NonFinite",
+        SolverError::Inverted { .. } => "Inverted",
+        SolverError::CourantExceeded { .. } => "CourantExceeded",
+        SolverError::Constitutive { .. } => "Constitutive",
+    }
+}
+
+/// runs a scene to `end` (shortened to fit [`MAX_STEPS`] at the initial time step), measuring the
+/// energy growth as described in the module docs.
+fn simulate<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize>(
+    shape: S,
+    material: M,
+    particles: Particles<M::State>,
+    config: SolverConfig,
+    end: f64,
+    ground: impl Fn(f64) -> f64,
+) -> Result<Measured, SolverError> {
+    let mut s = Solver::new(shape, vec![material], particles, config)?;
+    let g = config.gravity.length();
+    let e0 = s.energy();
+    let p = s.particles();
+    let heights: f64 = (0..p.len())
+        .map(|i| p.mass[i] * g * (p.position[i].y - ground(p.position[i].x)).max(0.0))
+        .sum();
+    let scale0 = e0.kinetic + e0.strain + heights;
+    // First step decides Δt; the end time is shortened so that the row stays within MAX_STEPS.
+    let first = s.step()?;
+    let end = end.min(MAX_STEPS * first.dt).max(first.time);
+    let mut m = Measured { steps: 1, apex: first.apex_returns as u64, ..Default::default() };
+    let mut released: f64 = 0.0;
+    let mut growth: f64 = f64::NEG_INFINITY;
+    let mut finite = true;
+    loop {
+        let e = s.energy();
+        finite &= e.total().is_finite() && e.residual.is_finite();
+        released = released.max(e0.potential - e.potential);
+        growth = growth.max(e.residual / (scale0 + released));
+        if s.time() >= end * (1.0 - 1e-12) {
+            break;
+        }
+        let r = s.step_capped(end - s.time())?;
+        m.apex += r.apex_returns as u64;
+        m.steps += 1;
+    }
+    let p = s.particles();
+    finite &= p.position.iter().chain(&p.velocity).all(|v| v.is_finite())
+        && p.stress.iter().all(|t| t.is_finite())
+        && p.volume.iter().all(|v| v.is_finite());
+    m.time = s.time();
+    m.growth = growth;
+    m.finite = finite;
+    Ok(m)
+}
+
+const RHO: f64 = 1000.0;
+
+/// the base scene: a 0.5 m × 0.5 m elastic block resting on a floor with μ = 0.3, moving at
+/// 1 m/s along it, on 0.125 m bilinear cells, 2 × 2 particles per cell, USAVG.
+#[derive(Clone, Copy, Debug)]
+struct Base {
+    young: f64,
+    poisson: f64,
+    courant: f64,
+    mu: f64,
+    ppc: usize,
+    velocity: Vector,
+    lift: f64,
+    end: f64,
+}
+
+impl Default for Base {
+    fn default() -> Self {
+        Self {
+            young: 1e6,
+            poisson: 0.3,
+            courant: 0.1,
+            mu: 0.3,
+            ppc: 2,
+            velocity: Vector::new(1.0, 0.0),
+            lift: 0.0,
+            end: 0.25,
+        }
+    }
+}
+
+fn base(b: Base) -> Result<Measured, RowError> {
+    let cell = 0.125;
+    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(cell), [16, 12]).map_err(setting)?;
+    let material = LinearElastic::from_young_poisson(b.young, b.poisson).map_err(setting)?;
+    let shape =
+        Shape::Rectangle { min: Vector::new(0.5, b.lift), max: Vector::new(1.0, b.lift + 0.5) };
+    let particles = block(&shape, cell, b.ppc, RHO, b.velocity, ());
+    let config = SolverConfig {
+        time_step: TimeStep::Courant(b.courant),
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: b.mu }),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    Ok(simulate(Bilinear(grid), material, particles, config, b.end, |_| 0.0)?)
+}
+
+/// a set-up error of the extremes' own scenes (grid, material).
+fn setting<E: std::fmt::Display>(e: E) -> RowError {
+    RowError::Setup(e.to_string())
+}
+
+/// a 0.5 m × 0.5 m block at rest on a slope θ (terrain grid, bilinear, μ = 0.3).
+fn slope(theta_deg: f64) -> Result<Measured, RowError> {
+    let theta = theta_deg.to_radians();
+    let l = 0.125;
+    let length = 4.0;
+    let profile = vec![Vector::new(0.0, 0.0), Vector::new(length, -length * theta.tan())];
+    let grid = TerrainGrid::new(TerrainGridSpec {
+        profile,
+        cell_width: l,
+        row_height: l / theta.cos(),
+        rows: 10,
+        kink_policy: KinkPolicy::Reject,
+    })
+    .map_err(setting)?;
+    let base = Vector::new(1.0, -theta.tan());
+    let shape = Shape::OnSlope { base_start: base, angle_rad: -theta, length: 0.5, thickness: 0.5 };
+    let particles = block(&shape, l, 2, RHO, Vector::ZERO, ());
+    let material = LinearElastic::from_young_poisson(1e6, 0.3).map_err(setting)?;
+    let config = SolverConfig {
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: 0.3 }),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let tan = theta.tan();
+    Ok(simulate(Bilinear(grid), material, particles, config, 0.25, move |x| -x * tan)?)
+}
+
+/// particles exactly on grid nodes (and so on the edges of every cell around them).
+fn on_cell_edges() -> Result<Measured, RowError> {
+    let cell = 0.125;
+    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(cell), [16, 12]).map_err(setting)?;
+    let material = LinearElastic::from_young_poisson(1e6, 0.3).map_err(setting)?;
+    let mut particles = Particles::default();
+    for j in 1..=4 {
+        for i in 4..=7 {
+            particles.push(NewParticle {
+                position: Vector::new(i as f64 * cell, j as f64 * cell),
+                velocity: Vector::new(1.0, 0.0),
+                volume: cell * cell,
+                density: RHO,
+                stress: Default::default(),
+                state: (),
+                material: 0,
+                body: 0,
+            });
+        }
+    }
+    let config = SolverConfig {
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: 0.3 }),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    Ok(simulate(Bilinear(grid), material, particles, config, 0.25, |_| 0.0)?)
+}
+
+/// cohesionless sand (the paper's, c = 0) stretched at 2 /s in both directions without gravity:
+/// every update is pulled past the cone's tip, to the apex.
+fn sand_in_tension() -> Result<Measured, RowError> {
+    let cell = 0.125;
+    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(cell), [24, 24]).map_err(setting)?;
+    let material = DruckerPrager::new(DruckerPragerParams {
+        cohesion: 0.0,
+        ..DruckerPragerParams::ABE2005_DRY_SAND
+    })
+    .map_err(setting)?;
+    let centre = Vector::splat(1.5);
+    let shape = Shape::Rectangle { min: centre - 0.25, max: centre + 0.25 };
+    let mut particles = block(&shape, cell, 2, 1600.0, Vector::ZERO, material.initial_state());
+    for i in 0..particles.len() {
+        particles.velocity[i] = 2.0 * (particles.position[i] - centre);
+    }
+    let config = SolverConfig { gravity: Vector::ZERO, ..Default::default() };
+    Ok(simulate(Bilinear(grid), material, particles, config, 0.25, |_| 0.0)?)
+}
+
+/// a 0.5 m block 0.25 m above a frictionless floor moving down at 100 m/s.
+fn impact(young: f64, courant: f64, end: f64) -> Result<Measured, RowError> {
+    base(Base {
+        young,
+        courant,
+        mu: 0.0,
+        velocity: Vector::new(0.0, -100.0),
+        lift: 0.25,
+        end,
+        ..Default::default()
+    })
+}
+
+fn rows() -> Vec<Row> {
+    let mut rows = Vec::new();
+    let complete = Expect::Complete { bound: Some(ENERGY_BOUND) };
+    let mut add = |name: &str,
+                   setting: String,
+                   expect: Expect,
+                   note: &'static str,
+                   run: Box<dyn Fn() -> Result<Measured, RowError>>| {
+        rows.push(Row { name: name.into(), setting, expect, note, run });
+    };
+    for c in [0.9, 1.0] {
+        add(
+            "Courant",
+            format!("C = {c}"),
+            complete,
+            "stable up to C = 1 (eq 13)",
+            Box::new(move || base(Base { courant: c, ..Default::default() })),
+        );
+    }
+    add(
+        "Courant",
+        "C = 1.5".into(),
+        Expect::Stops("InvalidSetting"),
+        "refused before any step",
+        Box::new(|| base(Base { courant: 1.5, ..Default::default() })),
+    );
+    add(
+        "Courant",
+        "C = 0.001".into(),
+        complete,
+        "tiny Δt: small-mass nodes are excluded by the solver's threshold, not by luck",
+        Box::new(|| base(Base { courant: 0.001, end: 0.05, ..Default::default() })),
+    );
+    for nu in [0.45, 0.49, 0.499] {
+        add(
+            "Poisson",
+            format!("ν = {nu}"),
+            complete,
+            "nearly incompressible: c grows, Δt shrinks",
+            Box::new(move || base(Base { poisson: nu, ..Default::default() })),
+        );
+    }
+    add(
+        "Young",
+        "E = 1e3 Pa".into(),
+        Expect::Stops("Inverted"),
+        "weight ρgH = 4.9 kPa ≫ E: the small-strain block collapses and a particle inverts",
+        Box::new(|| base(Base { young: 1e3, end: 1.0, ..Default::default() })),
+    );
+    for e in [1e5, 1e7, 1e9, 1e11] {
+        add(
+            "Young",
+            format!("E = {e:.0e} Pa"),
+            complete,
+            "end time shortened to 30 000 steps for stiff blocks",
+            Box::new(move || base(Base { young: e, ..Default::default() })),
+        );
+    }
+    for mu in [0.0, 2.0] {
+        add(
+            "friction",
+            format!("μ = {mu}"),
+            complete,
+            "sliding at 1 m/s; μ = 2 sticks at once",
+            Box::new(move || base(Base { mu, ..Default::default() })),
+        );
+    }
+    for theta in [0.0, 45.0, 60.0, 80.0] {
+        add(
+            "slope (terrain grid)",
+            format!("θ = {theta}°"),
+            complete,
+            "block at rest, μ = 0.3",
+            Box::new(move || slope(theta)),
+        );
+    }
+    for ppc in [1, 4] {
+        add(
+            "particles per cell",
+            format!("{} per cell", ppc * ppc),
+            complete,
+            "",
+            Box::new(move || base(Base { ppc, ..Default::default() })),
+        );
+    }
+    add(
+        "placement",
+        "particles on cell edges".into(),
+        complete,
+        "every particle exactly on a grid node",
+        Box::new(on_cell_edges),
+    );
+    add(
+        "apex path",
+        "c = 0 sand stretched at 2 /s".into(),
+        complete,
+        "all updates return to the apex",
+        Box::new(sand_in_tension),
+    );
+    add(
+        "impact 100 m/s",
+        "E = 1e6 Pa, C = 0.1".into(),
+        Expect::Stops("Inverted"),
+        "impact strain v/c = 100/36.7 > 1: the block is crushed",
+        Box::new(|| impact(1e6, 0.1, 0.01)),
+    );
+    add(
+        "impact 100 m/s",
+        "E = 1e9 Pa, C = 0.1".into(),
+        Expect::Complete { bound: None },
+        "growth reported, not bounded: the rigid-floor impact gains O(Δt) energy (see verify: free fall)",
+        Box::new(|| impact(1e9, 0.1, 0.01)),
+    );
+    add(
+        "impact 100 m/s",
+        "E = 1e9 Pa, C = 0.01".into(),
+        complete,
+        "the same impact at a small Courant number, within the 1 % bound",
+        Box::new(|| impact(1e9, 0.01, 0.01)),
+    );
+    rows
+}
+
+/// runs every row; `Ok(false)` when a row failed.
+pub fn run() -> Result<bool> {
+    let start = Instant::now();
+    let dir = crate::out_dir("extremes")?;
+    let mut table = Table::new(&[
+        "scene",
+        "setting",
+        "expected",
+        "outcome",
+        "steps",
+        "sim. time (s)",
+        "energy growth",
+        "apex returns",
+        "wall (s)",
+        "result",
+        "note",
+    ]);
+    for row in rows() {
+        let t0 = Instant::now();
+        let outcome = catch_unwind(AssertUnwindSafe(|| (row.run)()));
+        let wall = t0.elapsed().as_secs_f64();
+        let expected = match row.expect {
+            Expect::Complete { bound: Some(b) } => format!("completes, growth ≤ {}", pct(b)),
+            Expect::Complete { bound: None } => "completes (growth reported)".into(),
+            Expect::Stops(v) => format!("stops: {v}"),
+        };
+        let (text, steps, time, growth, apex, ok) = match (&outcome, row.expect) {
+            (Err(_), _) => (
+                "PANIC".to_string(),
+                String::new(),
+                String::new(),
+                String::new(),
+                String::new(),
+                false,
+            ),
+            (Ok(Err(e)), expect) => {
+                let v = variant(e);
+                let ok = matches!(expect, Expect::Stops(x) if x == v);
+                (format!("stopped: {v}: {e}"), "–".into(), "–".into(), "–".into(), "–".into(), ok)
+            }
+            (Ok(Ok(m)), expect) => {
+                let within = match expect {
+                    Expect::Complete { bound: Some(b) } => m.growth <= b,
+                    Expect::Complete { bound: None } => true,
+                    Expect::Stops(_) => false,
+                };
+                let ok = m.finite && m.growth.is_finite() && within;
+                let what = if m.finite { "completed" } else { "completed with NON-FINITE values" };
+                (
+                    what.to_string(),
+                    m.steps.to_string(),
+                    num(m.time),
+                    pct(m.growth),
+                    m.apex.to_string(),
+                    ok,
+                )
+            }
+        };
+        let status = if ok { Status::Pass } else { Status::Fail };
+        println!(
+            "{:<22} {:<28} {:<9} {:.2} s  {}",
+            row.name,
+            row.setting,
+            status.word(),
+            wall,
+            text
+        );
+        table.push(
+            vec![
+                row.name.clone(),
+                row.setting.clone(),
+                expected,
+                text,
+                steps,
+                time,
+                growth,
+                apex,
+                format!("{wall:.2}"),
+                status.word().into(),
+                row.note.into(),
+            ],
+            status,
+        );
+    }
+    let failures = table.failures();
+    let elapsed = start.elapsed().as_secs_f64();
+    println!("\n{}", table.text());
+    println!("{} rows, {failures} failed, {elapsed:.1} s", table.rows.len());
+    let mut report = String::new();
+    let _ = writeln!(
+        report,
+        "# Extremes (`cargo xtask extremes`)\n\n{} rows, {failures} failed, {elapsed:.1} s wall time.\n",
+        table.rows.len()
+    );
+    let _ = writeln!(
+        report,
+        "Energy growth = max over steps of residual / (KE₀ + strain₀ + Σ m g h₀ + potential energy released so far); \
+         the residual is positive when the integrator creates energy.\n"
+    );
+    report.push_str(&table.markdown());
+    std::fs::write(dir.join("report.md"), report)?;
+    println!("report: {}", dir.join("report.md").display());
+    Ok(failures == 0)
+}
