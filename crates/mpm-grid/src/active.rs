@@ -210,6 +210,49 @@ impl ActiveNodes {
         self.nodes.is_empty()
     }
 
+    /// dense indices of a stencil's nodes, `u32::MAX` for a node that is not active. One hash
+    /// probe per distinct block among the nodes (a 2 × 2 or 3 × 3 stencil usually lies in one
+    /// 8 × 8 block), instead of one per node.
+    #[inline]
+    pub fn indices_of<const N: usize>(&self, nodes: &[NodeId; N]) -> [u32; N] {
+        let mut out = [u32::MAX; N];
+        let mut last_key = NO_KEY;
+        let mut table: Option<&BlockIndex> = None;
+        for (o, &node) in out.iter_mut().zip(nodes) {
+            let (key, bit) = split(node);
+            if key != last_key {
+                table = self.block_of(key);
+                last_key = key;
+            }
+            if let Some(t) = table {
+                if (t.mask >> bit) & 1 == 1 {
+                    *o = t.dense[bit as usize];
+                }
+            }
+        }
+        out
+    }
+
+    /// the index table of the block with `key`, if that block is active.
+    #[inline]
+    fn block_of(&self, key: u64) -> Option<&BlockIndex> {
+        if self.tables.is_empty() {
+            return None;
+        }
+        let mask = self.slots.len() - 1;
+        let mut s = self.home(key);
+        loop {
+            let slot = self.slots[s];
+            if slot.value == EMPTY {
+                return None;
+            }
+            if slot.key == key {
+                return Some(&self.tables[slot.value as usize]);
+            }
+            s = (s + 1) & mask;
+        }
+    }
+
     /// dense index of `node`, `None` if it is not active. O(1): one hash probe, one table read.
     #[inline]
     pub fn index_of(&self, node: NodeId) -> Option<usize> {
@@ -286,6 +329,36 @@ mod tests {
             let (i0, j0) = block_origin(key);
             assert_eq!((i0 + (bit as i32 & 7), j0 + (bit as i32 >> 3)), (i, j));
         }
+    }
+
+    #[test]
+    fn indices_of_agrees_with_index_of_across_block_edges() {
+        let mut a = ActiveNodes::new();
+        // 2 × 2 and 3 × 3 stencils placed so that some straddle block edges (8k − 1 | 8k).
+        let stencils: Vec<[NodeId; 4]> = (-10..20)
+            .flat_map(|j| (-10..20).map(move |i| (i, j)))
+            .filter(|(i, j)| (i + 3 * j) % 7 == 0)
+            .map(|(i, j)| {
+                [
+                    NodeId::new(i, j),
+                    NodeId::new(i + 1, j),
+                    NodeId::new(i, j + 1),
+                    NodeId::new(i + 1, j + 1),
+                ]
+            })
+            .collect();
+        a.rebuild(stencils.iter().flatten().copied());
+        for s in &stencils {
+            let got = a.indices_of(s);
+            for k in 0..4 {
+                assert_eq!(got[k] as usize, a.index_of(s[k]).unwrap());
+            }
+        }
+        // A node outside the set is reported as u32::MAX, its neighbours still found.
+        let probe = [stencils[0][0], NodeId::new(1000, 1000)];
+        let got = a.indices_of(&probe);
+        assert_eq!(got[0] as usize, a.index_of(probe[0]).unwrap());
+        assert_eq!(got[1], u32::MAX);
     }
 
     #[test]

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::error::{Field, SolverError};
 use crate::math::{Real, Vector};
+use crate::par::CHUNK;
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -20,38 +21,34 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let failure = self
             .particles
             .position
-            .par_iter_mut()
-            .zip(self.particles.velocity.par_iter_mut())
+            .par_chunks_mut(CHUNK)
+            .zip(self.particles.velocity.par_chunks_mut(CHUNK))
             .enumerate()
-            .with_min_len(512)
-            .map(|(p, (x, vp))| {
-                let mut dx = Vector::ZERO;
-                let mut dv = Vector::ZERO;
-                for k in 0..N {
-                    let i = idx[p][k] as usize;
-                    // v_i^L = v_i + a_i Δt (eq 5)
-                    dx += w[p][k] * (v[i] + a[i] * dt);
-                    dv += w[p][k] * a[i];
+            .map(|(c, (xs, vs))| {
+                for (j, (x, vp)) in xs.iter_mut().zip(vs.iter_mut()).enumerate() {
+                    let p = c * CHUNK + j;
+                    let mut dx = Vector::ZERO;
+                    let mut dv = Vector::ZERO;
+                    for k in 0..N {
+                        let i = idx[p][k] as usize;
+                        // v_i^L = v_i + a_i Δt (eq 5)
+                        dx += w[p][k] * (v[i] + a[i] * dt);
+                        dv += w[p][k] * a[i];
+                    }
+                    let (x_new, v_new) = (*x + dt * dx, *vp + dt * dv);
+                    if !(x_new.is_finite() && v_new.is_finite()) {
+                        let field =
+                            if x_new.is_finite() { Field::Velocity } else { Field::Position };
+                        return Err(SolverError::NonFinite {
+                            step,
+                            particle: p,
+                            position: *x,
+                            field,
+                        });
+                    }
+                    *x = x_new;
+                    *vp = v_new;
                 }
-                let (x_new, v_new) = (*x + dt * dx, *vp + dt * dv);
-                if !x_new.is_finite() {
-                    return Err(SolverError::NonFinite {
-                        step,
-                        particle: p,
-                        position: *x,
-                        field: Field::Position,
-                    });
-                }
-                if !v_new.is_finite() {
-                    return Err(SolverError::NonFinite {
-                        step,
-                        particle: p,
-                        position: *x,
-                        field: Field::Velocity,
-                    });
-                }
-                *x = x_new;
-                *vp = v_new;
                 Ok(())
             })
             .find_first(Result::is_err);

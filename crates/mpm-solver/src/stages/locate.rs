@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use crate::error::SolverError;
 use crate::math::Vector;
+use crate::par::CHUNK;
 use crate::solver::{BoundaryNode, Solver};
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -25,20 +26,27 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
         let shape = &self.shape;
         let positions = &self.particles.position;
+        // Fixed chunks, each run in particle order: the first chunk that fails reports its first
+        // failing particle, so the error names the same particle for any thread count.
         let failure = sc
             .node_ids
-            .par_iter_mut()
-            .zip(sc.weights.par_iter_mut())
-            .zip(sc.gradients.par_iter_mut())
+            .par_chunks_mut(CHUNK)
+            .zip(sc.weights.par_chunks_mut(CHUNK))
+            .zip(sc.gradients.par_chunks_mut(CHUNK))
             .enumerate()
-            .map(|(p, ((ids, w), g))| match shape.stencil(positions[p]) {
-                Ok(s) => {
-                    *ids = s.nodes;
-                    *w = s.weights;
-                    *g = s.gradients;
-                    Ok(())
+            .map(|(c, ((ids, w), g))| {
+                for j in 0..ids.len() {
+                    let p = c * CHUNK + j;
+                    match shape.stencil(positions[p]) {
+                        Ok(s) => {
+                            ids[j] = s.nodes;
+                            w[j] = s.weights;
+                            g[j] = s.gradients;
+                        }
+                        Err(cause) => return Err((p, cause)),
+                    }
                 }
-                Err(cause) => Err((p, cause)),
+                Ok(())
             })
             .find_first(Result::is_err);
         if let Some(Err((particle, cause))) = failure {
@@ -52,12 +60,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
         sc.active.rebuild(sc.node_ids.iter().flatten().copied());
         let active = &sc.active;
-        sc.node_index.par_iter_mut().zip(sc.node_ids.par_iter()).for_each(|(idx, ids)| {
-            for k in 0..N {
-                // Every stencil node was inserted by the rebuild just above.
-                idx[k] = active.index_of(ids[k]).map_or(u32::MAX, |i| i as u32);
-            }
-        });
+        sc.node_index.par_chunks_mut(CHUNK).zip(sc.node_ids.par_chunks(CHUNK)).for_each(
+            |(idx, ids)| {
+                for (idx, ids) in idx.iter_mut().zip(ids) {
+                    // Every stencil node was inserted by the rebuild just above.
+                    *idx = active.indices_of(ids);
+                }
+            },
+        );
 
         // Node → (particle, slot) lists by a counting sort in particle order: deterministic.
         let nodes = active.len();

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
 use crate::math::Real;
+use crate::par::CHUNK;
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -57,18 +58,23 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// the first such particle is the one reported.
     fn fastest_signal(&self) -> (Real, usize, Real) {
         let p = &self.particles;
-        let (signal, particle) = (0..p.len())
+        let n = p.len();
+        let better = |a: (Real, usize), b: (Real, usize)| {
+            if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a }
+        };
+        let (signal, particle) = (0..n.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|i| {
-                let m = self.p_modulus[usize::from(p.material[i])];
-                let c = (m * p.volume[i] / p.mass[i]).sqrt();
-                let s = c + p.velocity[i].length();
-                (if s.is_finite() { s } else { Real::INFINITY }, i)
+            .map(|c| {
+                let mut best = (0.0, usize::MAX);
+                for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    let m = self.p_modulus[usize::from(p.material[i])];
+                    let c = (m * p.volume[i] / p.mass[i]).sqrt();
+                    let s = c + p.velocity[i].length();
+                    best = better(best, (if s.is_finite() { s } else { Real::INFINITY }, i));
+                }
+                best
             })
-            .reduce(
-                || (0.0, usize::MAX),
-                |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a },
-            );
+            .reduce(|| (0.0, usize::MAX), better);
         (signal, particle, p.velocity[particle].length())
     }
 }
