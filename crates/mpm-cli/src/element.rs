@@ -1,0 +1,219 @@
+//! `mpm element-test`: the constitutive crate's single-point drivers (the paper's §6(3)) from the
+//! command line, writing a CSV and PNG plots.
+//!
+//! The element tests are not a scene (there is no grid, body or time): they are reached only
+//! through this command. Several dilatancy angles and mixing parameters can be given at once;
+//! each combination is one case (one curve, one block of CSV rows).
+
+use std::path::PathBuf;
+
+use mpm_constitutive::element_test::{simple_shear, uniaxial_plane_strain};
+use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor};
+
+use crate::error::RunError;
+use crate::output::atomic;
+use crate::output::plots::{self, Chart, Series, Style};
+
+/// Which element test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElementTest {
+    /// plane-strain uniaxial compression: ε_yy prescribed, σ_xx = 0, ε_zz = 0.
+    Uniaxial,
+    /// drained simple shear at constant vertical stress: γ_xy prescribed, ε_xx = ε_zz = 0.
+    SimpleShear,
+}
+
+/// Settings of `mpm element-test`.
+#[derive(Clone, Debug)]
+pub struct ElementTestOptions {
+    /// which test.
+    pub test: ElementTest,
+    /// Young's modulus (Pa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// cohesion (Pa).
+    pub cohesion: f64,
+    /// friction angle (degrees).
+    pub friction_angle_deg: f64,
+    /// dilatancy angles (degrees), one case each.
+    pub dilatancy_deg: Vec<f64>,
+    /// plastic modulus H (Pa).
+    pub hardening_modulus: f64,
+    /// mixing parameters M, one case each.
+    pub mixing: Vec<f64>,
+    /// final strain: ε_yy (uniaxial, negative = compression) or engineering γ_xy (shear).
+    pub strain: f64,
+    /// load steps.
+    pub steps: usize,
+    /// simple shear: initial isotropic stress (Pa, negative = compression), held vertically.
+    pub confining_stress: f64,
+    /// output directory.
+    pub out_dir: PathBuf,
+    /// overwrite existing files.
+    pub force: bool,
+}
+
+/// One case's end point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementCaseResult {
+    /// "ψ = 0°, M = 0.8".
+    pub label: String,
+    /// σ_yy at the end (Pa).
+    pub final_syy: f64,
+    /// σ_xy at the end (Pa).
+    pub final_sxy: f64,
+    /// volumetric strain at the end.
+    pub final_eps_vol: f64,
+    /// σ_yy at the first plastic step (Pa), if any.
+    pub first_yield_syy: Option<f64>,
+}
+
+/// Runs the cases and writes `element_test.csv` and plots into `out_dir`.
+pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>, RunError> {
+    if !(o.steps >= 1 && o.steps <= 10_000_000) {
+        return Err(RunError::Setup(format!(
+            "--steps {} is out of range: give 1 to 10000000 load steps",
+            o.steps
+        )));
+    }
+    if !o.strain.is_finite() || o.strain == 0.0 {
+        return Err(RunError::Setup(format!(
+            "--strain {} must be finite and non-zero (e.g. -1e-3 for compression, 0.05 for shear)",
+            o.strain
+        )));
+    }
+    if !o.confining_stress.is_finite() {
+        return Err(RunError::Setup("--confining-stress must be finite (Pa)".into()));
+    }
+    let dir = &o.out_dir;
+    let csv_path = dir.join("element_test.csv");
+    if csv_path.exists() && !o.force {
+        return Err(RunError::OutputExists(dir.clone()));
+    }
+    std::fs::create_dir_all(dir).map_err(|source| RunError::Io { path: dir.clone(), source })?;
+    let mut csv = String::from(
+        "case,psi_deg,mixing,step,eps_xx,eps_yy,eps_zz,gamma_xy,eps_vol,sigma_xx,sigma_yy,\
+         sigma_zz,sigma_xy,eps_p_bar,surface\n",
+    );
+    let mut results = Vec::new();
+    let mut curves: Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> = Vec::new();
+    let dilatancy = if o.dilatancy_deg.is_empty() { vec![0.0] } else { o.dilatancy_deg.clone() };
+    let mixing = if o.mixing.is_empty() { vec![1.0] } else { o.mixing.clone() };
+    for &psi in &dilatancy {
+        for &m in &mixing {
+            let model = DruckerPrager::new(DruckerPragerParams {
+                young: o.young,
+                poisson: o.poisson,
+                cohesion: o.cohesion,
+                friction_angle_deg: o.friction_angle_deg,
+                dilatancy_angle_deg: psi,
+                hardening_modulus: o.hardening_modulus,
+                mixing: m,
+                cone_match: ConeMatch::PlaneStrain,
+            })
+            .map_err(|e| RunError::Setup(format!("material parameters refused: {e}")))?;
+            let path = match o.test {
+                ElementTest::Uniaxial => {
+                    uniaxial_plane_strain(&model, SymTensor::ZERO, o.strain, o.steps)
+                }
+                ElementTest::SimpleShear => {
+                    let s = o.confining_stress;
+                    simple_shear(&model, SymTensor::new(s, s, s, 0.0, 0.0, 0.0), o.strain, o.steps)
+                }
+            }
+            .map_err(|e| RunError::Setup(format!("element test failed: {e}")))?;
+            let case = curves.len();
+            let label = format!("ψ = {psi}°, M = {m}");
+            let mut a = Vec::new();
+            let mut b = Vec::new();
+            for p in &path {
+                let e = p.strain;
+                let s = p.stress;
+                let ev = e.trace();
+                csv.push_str(&format!(
+                    "{case},{psi},{m},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                    p.step,
+                    e.xx,
+                    e.yy,
+                    e.zz,
+                    2.0 * e.xy,
+                    ev,
+                    s.xx,
+                    s.yy,
+                    s.zz,
+                    s.xy,
+                    p.eps_p_bar,
+                    p.surface.as_str()
+                ));
+                match o.test {
+                    ElementTest::Uniaxial => a.push((-e.yy, -s.yy)),
+                    ElementTest::SimpleShear => {
+                        a.push((2.0 * e.xy, ev));
+                        b.push((2.0 * e.xy, s.xy));
+                    }
+                }
+            }
+            let last = path.last().copied().unwrap_or(path[0]);
+            results.push(ElementCaseResult {
+                label: label.clone(),
+                final_syy: last.stress.yy,
+                final_sxy: last.stress.xy,
+                final_eps_vol: last.strain.trace(),
+                first_yield_syy: path
+                    .iter()
+                    .find(|p| p.surface != mpm_constitutive::Surface::Elastic)
+                    .map(|p| p.stress.yy),
+            });
+            curves.push((label, a, b));
+        }
+    }
+    atomic::write(&csv_path, csv.as_bytes())?;
+    let series = |pick: &dyn Fn(&(String, Vec<(f64, f64)>, Vec<(f64, f64)>)) -> Vec<(f64, f64)>| {
+        curves
+            .iter()
+            .enumerate()
+            .map(|(k, c)| Series {
+                name: c.0.clone(),
+                points: pick(c),
+                style: Style::Line,
+                color: k,
+            })
+            .collect::<Vec<_>>()
+    };
+    let chart = |title, x_label, y_label| Chart {
+        title,
+        x_label,
+        y_label,
+        size: (900, 560),
+        equal_aspect: false,
+    };
+    match o.test {
+        ElementTest::Uniaxial => plots::chart(
+            &dir.join("uniaxial.png"),
+            &chart(
+                "Plane-strain uniaxial compression",
+                "axial strain −ε_yy",
+                "axial stress −σ_yy (Pa)",
+            ),
+            &series(&|c| c.1.clone()),
+        )?,
+        ElementTest::SimpleShear => {
+            plots::chart(
+                &dir.join("simple_shear_volume.png"),
+                &chart(
+                    "Simple shear: volume change",
+                    "shear strain γ_xy",
+                    "volumetric strain ε_vol",
+                ),
+                &series(&|c| c.1.clone()),
+            )?;
+            plots::chart(
+                &dir.join("simple_shear_stress.png"),
+                &chart("Simple shear: stress", "shear strain γ_xy", "shear stress σ_xy (Pa)"),
+                &series(&|c| c.2.clone()),
+            )?;
+        }
+    }
+    Ok(results)
+}

@@ -1,0 +1,400 @@
+//! `mpm`: the command line (clap only; the work is in the `mpm_cli` library).
+//!
+//! Exit codes: 0 success; 1 I/O or other failure; 2 invalid scene or arguments; 3 the solver
+//! stopped with an instability (files up to the failure are written); 130 interrupted (a
+//! checkpoint was written; continue with `mpm resume DIR`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::{Parser, Subcommand, ValueEnum};
+use mpm_cli::{
+    DEFAULT_SCENE, ElementTest, ElementTestOptions, RunError, RunOptions, RunStatus, RunSummary,
+    SCENES, Scene, SceneError,
+};
+
+#[derive(Parser)]
+#[command(
+    name = "mpm",
+    version,
+    about = "Explicit MPM for dry granular flows (Abe, Johansson & Konagai 2005)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene (default: the embedded dry-sand flume).
+    Run {
+        /// a scene file, or the name of an embedded scene (`mpm scenes`).
+        scene: Option<String>,
+        /// output directory [default: out/<scene name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// worker threads [default: one per core].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// no progress output.
+        #[arg(long)]
+        quiet: bool,
+        /// overwrite an existing output directory.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Validate a scene and print what a run would do, without running it.
+    Check {
+        /// a scene file, or the name of an embedded scene.
+        scene: String,
+    },
+    /// List the embedded scenes, or write one out as an editable file.
+    Scenes {
+        /// write the embedded scene NAME to PATH (default NAME.toml).
+        #[arg(long, value_name = "NAME")]
+        write: Option<String>,
+        /// where to write it.
+        path: Option<PathBuf>,
+        /// overwrite an existing file.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Run a constitutive element test (plane-strain uniaxial compression or simple shear).
+    ElementTest {
+        /// which test.
+        test: TestKind,
+        /// Young's modulus E (Pa).
+        #[arg(long, default_value_t = 2.0e6)]
+        young: f64,
+        /// Poisson's ratio ν.
+        #[arg(long, default_value_t = 0.3)]
+        poisson: f64,
+        /// cohesion c (Pa).
+        #[arg(long, default_value_t = 10.0)]
+        cohesion: f64,
+        /// friction angle φ (degrees).
+        #[arg(long, default_value_t = 40.0)]
+        friction_angle: f64,
+        /// dilatancy angle(s) ψ (degrees), comma-separated: one curve each.
+        #[arg(long, value_delimiter = ',', default_value = "0")]
+        dilatancy: Vec<f64>,
+        /// plastic modulus H (Pa).
+        #[arg(long, default_value_t = 0.0)]
+        hardening: f64,
+        /// mixing parameter(s) M (1 isotropic, 0 kinematic), comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "0.8")]
+        mixing: Vec<f64>,
+        /// final strain: ε_yy for uniaxial [default -1e-3], engineering γ_xy for simple
+        /// shear [default 0.02].
+        #[arg(long, allow_negative_numbers = true)]
+        strain: Option<f64>,
+        /// load steps.
+        #[arg(long, default_value_t = 400)]
+        steps: usize,
+        /// simple shear: initial isotropic stress, held vertically (Pa, negative = compression).
+        #[arg(long, default_value_t = -1000.0, allow_negative_numbers = true)]
+        confining_stress: f64,
+        /// output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// overwrite existing files.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Continue a run from the last checkpoint in its output directory.
+    Resume {
+        /// the run's output directory.
+        dir: PathBuf,
+        /// worker threads [default: one per core].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// no progress output.
+        #[arg(long)]
+        quiet: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TestKind {
+    /// plane-strain uniaxial compression (σ_xx = 0).
+    Uniaxial,
+    /// drained simple shear at constant vertical stress.
+    SimpleShear,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { scene, out, threads, quiet, force } => {
+            let name = scene.unwrap_or_else(|| DEFAULT_SCENE.to_string());
+            let scene = match load(&name) {
+                Ok(s) => s,
+                Err(e) => return scene_failure(&e),
+            };
+            let out = out.unwrap_or_else(|| PathBuf::from("out").join(stem(&name)));
+            let opts = RunOptions {
+                out_dir: Some(out.clone()),
+                threads,
+                quiet,
+                force,
+                stop_after: None,
+                interrupt: Some(ctrl_c_flag()),
+            };
+            if !quiet {
+                eprintln!(
+                    "mpm: running {} ({} particles, end time {} s) into {}",
+                    scene.origin(),
+                    scene.particle_count(),
+                    scene.end_time(),
+                    out.display()
+                );
+            }
+            finish(mpm_cli::run_scene(&scene, &opts), &out, quiet)
+        }
+        Command::Resume { dir, threads, quiet } => {
+            let opts = RunOptions {
+                out_dir: Some(dir.clone()),
+                threads,
+                quiet,
+                force: false,
+                stop_after: None,
+                interrupt: Some(ctrl_c_flag()),
+            };
+            finish(mpm_cli::resume(&dir, &opts), &dir, quiet)
+        }
+        Command::Check { scene } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(e) => return scene_failure(&e),
+            };
+            match mpm_cli::check_scene(&scene) {
+                Ok(r) => {
+                    let c = scene.solver_config();
+                    println!("{}: valid", scene.origin());
+                    println!("  particles:        {}", r.particles);
+                    println!(
+                        "  grid:             {} × {} cells, {} active nodes at t = 0",
+                        r.cells[0], r.cells[1], r.active_nodes
+                    );
+                    println!(
+                        "  scheme:           {}, {} shape functions, time step {:?}",
+                        c.scheme.name(),
+                        scene.shape_function().name(),
+                        c.time_step
+                    );
+                    println!("  initial Δt:       {:.4e} s", r.initial_dt);
+                    println!(
+                        "  steps:            about {} to t = {} s",
+                        r.estimated_steps,
+                        scene.end_time()
+                    );
+                    println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
+                    println!(
+                        "  frames:           {} (about {:.1} MB on disk)",
+                        r.frames,
+                        r.frame_bytes as f64 / 1e6
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => run_failure(&e),
+            }
+        }
+        Command::Scenes { write, path, force } => match write {
+            None => {
+                for (name, text) in SCENES {
+                    let title = mpm_cli::title_of(text).unwrap_or_default();
+                    let default = if name == DEFAULT_SCENE { " (default)" } else { "" };
+                    println!("{name:<20} {title}{default}");
+                }
+                println!("(the element tests run with `mpm element-test uniaxial|simple-shear`)");
+                ExitCode::SUCCESS
+            }
+            Some(name) => {
+                let Some(text) = mpm_cli::embedded_scene(&name) else {
+                    let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
+                    eprintln!(
+                        "error: no embedded scene `{name}`; choose one of {}",
+                        names.join(", ")
+                    );
+                    return ExitCode::from(2);
+                };
+                let path = path.unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
+                if path.exists() && !force {
+                    eprintln!(
+                        "error: {} exists; choose another path or pass --force",
+                        path.display()
+                    );
+                    return ExitCode::from(1);
+                }
+                match std::fs::write(&path, text) {
+                    Ok(()) => {
+                        println!("wrote {}", path.display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("error: {}: {e}", path.display());
+                        ExitCode::from(1)
+                    }
+                }
+            }
+        },
+        Command::ElementTest {
+            test,
+            young,
+            poisson,
+            cohesion,
+            friction_angle,
+            dilatancy,
+            hardening,
+            mixing,
+            strain,
+            steps,
+            confining_stress,
+            out,
+            force,
+        } => {
+            let test = match test {
+                TestKind::Uniaxial => ElementTest::Uniaxial,
+                TestKind::SimpleShear => ElementTest::SimpleShear,
+            };
+            let strain = strain.unwrap_or(match test {
+                ElementTest::Uniaxial => -1e-3,
+                ElementTest::SimpleShear => 0.02,
+            });
+            let opts = ElementTestOptions {
+                test,
+                young,
+                poisson,
+                cohesion,
+                friction_angle_deg: friction_angle,
+                dilatancy_deg: dilatancy,
+                hardening_modulus: hardening,
+                mixing,
+                strain,
+                steps,
+                confining_stress,
+                out_dir: out.clone(),
+                force,
+            };
+            match mpm_cli::run_element_test(&opts) {
+                Ok(cases) => {
+                    for c in cases {
+                        let first =
+                            c.first_yield_syy.map_or("none".into(), |v| format!("{v:.3} Pa"));
+                        println!(
+                            "{}: first yield σ_yy {first}; final σ_yy {:.3} Pa, σ_xy {:.3} Pa, ε_vol {:.4e}",
+                            c.label, c.final_syy, c.final_sxy, c.final_eps_vol
+                        );
+                    }
+                    println!("wrote {}", out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => run_failure(&e),
+            }
+        }
+    }
+}
+
+/// A scene file path, or an embedded scene's name when no such file exists.
+fn load(name: &str) -> Result<Scene, SceneError> {
+    let path = Path::new(name);
+    if !path.is_file() {
+        if let Some(text) = mpm_cli::embedded_scene(name) {
+            return mpm_cli::load_scene_str(text, &format!("embedded:{name}"));
+        }
+    }
+    mpm_cli::load_scene_file(path)
+}
+
+fn stem(name: &str) -> String {
+    Path::new(name).file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned())
+}
+
+/// A flag set by Ctrl-C (a second Ctrl-C exits at once).
+fn ctrl_c_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    let installed = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\nmpm: interrupted; writing a checkpoint after this step (Ctrl-C again to abort)"
+        );
+    });
+    if let Err(e) = installed {
+        eprintln!("mpm: warning: Ctrl-C will not checkpoint ({e})");
+    }
+    flag
+}
+
+fn scene_failure(e: &SceneError) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::from(2)
+}
+
+fn run_failure(e: &RunError) -> ExitCode {
+    eprintln!("error: {e}");
+    match e {
+        RunError::Scene(_) => ExitCode::from(2),
+        RunError::Solver { .. } => ExitCode::from(3),
+        _ => ExitCode::from(1),
+    }
+}
+
+fn print_summary(s: &RunSummary, out: &Path) {
+    eprintln!(
+        "mpm: {:?}: {} particles, {} steps to t = {:.4} s (Δt {:.3e}–{:.3e} s), wall {:.2} s, \
+         {:.3e} particle-steps/s on {} thread(s)",
+        s.status,
+        s.particles,
+        s.steps,
+        s.simulated_time,
+        s.dt.min,
+        s.dt.max,
+        s.wall_time_s,
+        s.particle_steps_per_s,
+        s.threads
+    );
+    eprintln!(
+        "mpm: front x = {:.3} m (travel {:.3} m), tail x = {:.3} m, max thickness {:.3} m, \
+         centre of mass travel {:.3} m; energy residual {:.3e} J/m",
+        s.runout.front_x,
+        s.runout.front_travel,
+        s.runout.tail_x,
+        s.runout.max_thickness,
+        s.runout.com_travel,
+        s.energy.residual
+    );
+    eprintln!("mpm: output in {}", out.display());
+}
+
+fn finish(result: Result<RunSummary, RunError>, out: &Path, quiet: bool) -> ExitCode {
+    match result {
+        Ok(s) => {
+            if !quiet {
+                print_summary(&s, out);
+            }
+            if s.status == RunStatus::Interrupted {
+                eprintln!(
+                    "mpm: interrupted at t = {} s; continue with `mpm resume {}`",
+                    s.simulated_time,
+                    out.display()
+                );
+                ExitCode::from(130)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            if let RunError::Solver { summary, .. } = &e {
+                if !quiet {
+                    print_summary(summary, out);
+                }
+            }
+            run_failure(&e)
+        }
+    }
+}

@@ -1,0 +1,127 @@
+//! The one place where a scene's run-time choices become types: constitutive model
+//! (elastic | Drucker-Prager) × grid with shape functions (bilinear on the terrain grid,
+//! bilinear | uGIMP | quadratic B-spline on the regular grid). [`dispatch`] matches once per
+//! scene and calls a generic [`Job`]; everything below runs monomorphised, with no per-particle
+//! dynamic dispatch.
+
+use mpm_constitutive::{ConstitutiveModel, DpState, DruckerPrager, LinearElastic, SymTensor};
+use mpm_grid::{Bilinear, Gimp, QuadraticBSpline, ShapeFunctions};
+use mpm_solver::{Checkpoint, NewParticle, Particles};
+use serde::{Deserialize, Serialize};
+
+use crate::error::SceneError;
+use crate::scene::ShapeFunctionKind;
+use crate::validate::{GridBuilt, MaterialsBuilt, Scene, Seed};
+
+/// A solver state of either model, as stored in checkpoint files.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) enum SavedState {
+    /// elastic scenes.
+    Elastic(Checkpoint<()>),
+    /// Drucker-Prager scenes.
+    Plastic(Checkpoint<DpState>),
+}
+
+/// A constitutive model a scene can use.
+pub(crate) trait SceneModel: ConstitutiveModel + Clone + 'static {
+    /// wraps a solver checkpoint for storage.
+    fn wrap(c: Checkpoint<Self::State>) -> SavedState;
+    /// unwraps a stored checkpoint of this model (`None` for the other model).
+    fn unwrap(s: SavedState) -> Option<Checkpoint<Self::State>>;
+}
+
+impl SceneModel for LinearElastic {
+    fn wrap(c: Checkpoint<()>) -> SavedState {
+        SavedState::Elastic(c)
+    }
+    fn unwrap(s: SavedState) -> Option<Checkpoint<()>> {
+        match s {
+            SavedState::Elastic(c) => Some(c),
+            SavedState::Plastic(_) => None,
+        }
+    }
+}
+
+impl SceneModel for DruckerPrager {
+    fn wrap(c: Checkpoint<DpState>) -> SavedState {
+        SavedState::Plastic(c)
+    }
+    fn unwrap(s: SavedState) -> Option<Checkpoint<DpState>> {
+        match s {
+            SavedState::Plastic(c) => Some(c),
+            SavedState::Elastic(_) => None,
+        }
+    }
+}
+
+/// Work generic over the model and the shape functions.
+pub(crate) trait Job {
+    /// what the job returns.
+    type Output;
+    /// runs with concrete types.
+    fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        self,
+        scene: &Scene,
+        shape: S,
+        materials: Vec<M>,
+    ) -> Self::Output;
+}
+
+/// Builds the scene's shape functions and materials and runs `job` with them.
+pub(crate) fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
+    let r = &scene.r;
+    fn with_shape<J: Job, M: SceneModel>(
+        scene: &Scene,
+        job: J,
+        materials: Vec<M>,
+    ) -> Result<J::Output, SceneError> {
+        let r = &scene.r;
+        Ok(match (&r.grid, r.shape_function) {
+            (GridBuilt::Terrain(t), _) => job.run(scene, Bilinear(t.clone()), materials),
+            (GridBuilt::Regular(g), ShapeFunctionKind::Bilinear) => {
+                job.run(scene, Bilinear(*g), materials)
+            }
+            (GridBuilt::Regular(g), ShapeFunctionKind::Gimp) => {
+                let gimp =
+                    Gimp::with_particles_per_cell(*g, [r.gimp_ppc; 2]).map_err(|e| SceneError {
+                        origin: scene.origin.clone(),
+                        line: None,
+                        column: None,
+                        path: "solver.shape_function".into(),
+                        value: Some("\"gimp\"".into()),
+                        problem: e.to_string(),
+                        admissible: "particles_per_cell ≥ 1".into(),
+                        fix: "check particles_per_cell".into(),
+                    })?;
+                job.run(scene, gimp, materials)
+            }
+            (GridBuilt::Regular(g), ShapeFunctionKind::Bspline) => {
+                job.run(scene, QuadraticBSpline::new(*g), materials)
+            }
+        })
+    }
+    match &r.materials {
+        MaterialsBuilt::Elastic(m) => with_shape(scene, job, m.clone()),
+        MaterialsBuilt::Plastic(m) => with_shape(scene, job, m.clone()),
+    }
+}
+
+/// The scene's particles with each material's initial state.
+pub(crate) fn particles<M: SceneModel>(seeds: &[Seed], materials: &[M]) -> Particles<M::State> {
+    let mut p = Particles::with_capacity(seeds.len());
+    for s in seeds {
+        let state =
+            materials.get(usize::from(s.material)).map(|m| m.initial_state()).unwrap_or_default();
+        p.push(NewParticle {
+            position: s.position,
+            velocity: s.velocity,
+            volume: s.volume,
+            density: s.density,
+            stress: SymTensor::ZERO,
+            state,
+            material: s.material,
+            body: s.body,
+        });
+    }
+    p
+}

@@ -1,0 +1,185 @@
+//! PNG plots with plotters: one chart function ([`chart`]) drawing lines, dashed lines and
+//! points, used for the energy history, probe displacement against its analytic curve, the
+//! runout history, the final deposit and the element tests.
+//!
+//! The font (DejaVu Sans, see `assets/DejaVuSans-LICENSE.txt`) is compiled in, so plots need no
+//! system font.
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use crate::error::RunError;
+use crate::output::atomic;
+
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+fn register_font() {
+    REGISTER.call_once(|| {
+        // The embedded font is a valid TTF; if registration failed, text would be missing but
+        // the plot would still be drawn.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Style {
+    /// a solid line.
+    Line,
+    /// a dashed line (analytic references).
+    Dashed,
+    /// small filled circles.
+    Points,
+    /// a thick solid line (the ground).
+    Thick,
+}
+
+/// One data series.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// legend label ("" for none).
+    pub name: String,
+    /// (x, y) points; non-finite points are skipped.
+    pub points: Vec<(f64, f64)>,
+    /// how to draw it.
+    pub style: Style,
+    /// palette index.
+    pub color: usize,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+    RGBColor(23, 190, 207),
+];
+
+/// A chart's texts and geometry.
+#[derive(Clone, Debug)]
+pub struct Chart<'a> {
+    /// title above the plot.
+    pub title: &'a str,
+    /// x axis label.
+    pub x_label: &'a str,
+    /// y axis label.
+    pub y_label: &'a str,
+    /// image size in pixels.
+    pub size: (u32, u32),
+    /// equal scales on both axes (geometry plots).
+    pub equal_aspect: bool,
+}
+
+fn bounds(series: &[Series]) -> (f64, f64, f64, f64) {
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for s in series {
+        for &(x, y) in &s.points {
+            if x.is_finite() && y.is_finite() {
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+                y0 = y0.min(y);
+                y1 = y1.max(y);
+            }
+        }
+    }
+    if !x0.is_finite() {
+        return (0.0, 1.0, 0.0, 1.0);
+    }
+    let pad = |a: f64, b: f64| {
+        let span = b - a;
+        let d = if span > 0.0 { 0.05 * span } else { 0.5 * a.abs().max(1.0) };
+        (a - d, b + d)
+    };
+    let (x0, x1) = pad(x0, x1);
+    let (y0, y1) = pad(y0, y1);
+    (x0, x1, y0, y1)
+}
+
+/// draws `series` into the PNG at `path` (written atomically).
+pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), RunError> {
+    register_font();
+    let tmp = atomic::temp_path(path);
+    let fail =
+        |e: String| RunError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
+    let (mut x0, mut x1, mut y0, mut y1) = bounds(series);
+    if c.equal_aspect {
+        // plotting area ≈ size minus margins and label areas
+        let (w, h) = (f64::from(c.size.0) - 110.0, f64::from(c.size.1) - 110.0);
+        let (sx, sy) = ((x1 - x0) / w, (y1 - y0) / h);
+        if sx > sy {
+            let mid = 0.5 * (y0 + y1);
+            y0 = mid - 0.5 * sx * h;
+            y1 = mid + 0.5 * sx * h;
+        } else {
+            let mid = 0.5 * (x0 + x1);
+            x0 = mid - 0.5 * sy * w;
+            x1 = mid + 0.5 * sy * w;
+        }
+    }
+    {
+        let root = BitMapBackend::new(&tmp, c.size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(c.title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| fail(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc(c.x_label)
+            .y_desc(c.y_label)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(|e| fail(e.to_string()))?;
+        let mut any_legend = false;
+        for s in series {
+            let color = PALETTE[s.color % PALETTE.len()];
+            let pts: Vec<(f64, f64)> =
+                s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+            let anno = match s.style {
+                Style::Line | Style::Thick => {
+                    let width = if s.style == Style::Thick { 3 } else { 2 };
+                    chart
+                        .draw_series(LineSeries::new(pts, color.stroke_width(width)))
+                        .map_err(|e| fail(e.to_string()))?
+                }
+                Style::Dashed => chart
+                    .draw_series(DashedLineSeries::new(pts, 8, 5, color.stroke_width(2)))
+                    .map_err(|e| fail(e.to_string()))?,
+                Style::Points => chart
+                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))
+                    .map_err(|e| fail(e.to_string()))?,
+            };
+            if !s.name.is_empty() {
+                any_legend = true;
+                anno.label(s.name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            }
+        }
+        if any_legend {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| fail(e.to_string()))?;
+        }
+        root.present().map_err(|e| fail(e.to_string()))?;
+    }
+    atomic::commit(&tmp, path)
+}

@@ -1,0 +1,700 @@
+//! The run driver: builds the solver for a scene, steps it to the end time with an observer
+//! that records time series, writes frames and checkpoints and draws progress, and writes the
+//! final files — also when the solver stops with an instability or the user interrupts.
+//!
+//! Output timing never changes the steps: frames, series rows and checkpoints are taken after
+//! the first step that reaches their time, so a resumed run takes exactly the steps of an
+//! uninterrupted one (Δt depends only on the particle state, and only the end time shortens a
+//! step).
+
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use mpm_grid::ShapeFunctions;
+use mpm_solver::{Observer, RunEnd, Solver, StepReport, Vector};
+use serde::{Deserialize, Serialize};
+
+use crate::checkpoint::{self, CheckpointFile};
+use crate::error::{RunError, SceneError};
+use crate::model::{self, Job, SavedState, SceneModel};
+use crate::output::csv::{self, EnergyRow, ProbeRow};
+use crate::output::plots::{self, Chart, Series, Style};
+use crate::output::{atomic, vtk};
+use crate::progress::Progress;
+use crate::summary::{self, DtStats, RunStatus, RunSummary, RunoutMetrics};
+use crate::validate::{GridBuilt, Scene, load_scene_str};
+
+/// How to run a scene.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// output directory; `None` writes nothing (the summary is still returned).
+    pub out_dir: Option<PathBuf>,
+    /// rayon threads; `None` uses rayon's default (one per core).
+    pub threads: Option<usize>,
+    /// no progress output.
+    pub quiet: bool,
+    /// overwrite an existing, non-empty output directory.
+    pub force: bool,
+    /// stop (as on Ctrl-C, writing a checkpoint) after the first step that reaches this
+    /// simulated time (s).
+    pub stop_after: Option<f64>,
+    /// set to true (e.g. by a Ctrl-C handler) to stop after the current step with a checkpoint.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// Output history carried in checkpoints so that a resumed run continues its files.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub(crate) struct History {
+    energy: Vec<EnergyRow>,
+    probes: Vec<ProbeRow>,
+    runout: Vec<RunoutMetrics>,
+    /// (time, file relative to the output directory).
+    frames: Vec<(f64, String)>,
+    /// index k of the last frame time k·interval taken.
+    frame_slot: u64,
+    series_slot: u64,
+    checkpoint_slot: u64,
+    dt_min: f64,
+    dt_max: f64,
+    dt_first: f64,
+    /// wall time and particle-steps of earlier sessions.
+    wall_time: f64,
+    particle_steps: f64,
+    initial: Option<RunoutMetrics>,
+}
+
+/// What `mpm check` reports.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CheckReport {
+    /// particles generated.
+    pub particles: usize,
+    /// grid cells (columns × rows, or nx × ny).
+    pub cells: [usize; 2],
+    /// active grid nodes at t = 0.
+    pub active_nodes: usize,
+    /// Δt of the first step (s).
+    pub initial_dt: f64,
+    /// end time / initial Δt (the real count varies as speeds change).
+    pub estimated_steps: u64,
+    /// heap memory of particles and per-step scratch after locating (bytes).
+    pub memory_bytes: usize,
+    /// particle frames that would be written.
+    pub frames: u64,
+    /// approximate size of all frames on disk (bytes).
+    pub frame_bytes: u64,
+}
+
+/// Validates a scene fully (building the solver, locating every particle) without stepping.
+pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
+    struct CheckJob;
+    impl Job for CheckJob {
+        type Output = Result<CheckReport, RunError>;
+        fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+            self,
+            scene: &Scene,
+            shape: S,
+            materials: Vec<M>,
+        ) -> Self::Output {
+            let r = &scene.r;
+            let particles = model::particles(&r.seeds, &materials);
+            let solver = Solver::new(shape, materials, particles, r.config)
+                .map_err(|e| setup_error(scene, &e.to_string()))?;
+            let cells = match &r.grid {
+                GridBuilt::Terrain(t) => [t.columns(), t.rows()],
+                GridBuilt::Regular(g) => g.cells(),
+            };
+            let frames =
+                if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
+            let per_frame = 60 + 230 * r.output.fields.len() as u64 / 8 * r.seeds.len() as u64;
+            Ok(CheckReport {
+                particles: r.seeds.len(),
+                cells,
+                active_nodes: solver.active_nodes().len(),
+                initial_dt: r.initial_dt,
+                estimated_steps: (r.end_time / r.initial_dt).ceil() as u64,
+                memory_bytes: solver.heap_bytes(),
+                frames,
+                frame_bytes: frames * per_frame,
+            })
+        }
+    }
+    model::dispatch(scene, CheckJob)?
+}
+
+fn setup_error(scene: &Scene, message: &str) -> RunError {
+    RunError::from(SceneError {
+        origin: scene.origin.clone(),
+        line: None,
+        column: None,
+        path: "bodies".into(),
+        value: None,
+        problem: format!("the solver refused the scene: {message}"),
+        admissible: String::new(),
+        fix: "check the bodies' positions and materials".into(),
+    })
+}
+
+/// Runs `scene` to its end time (see [`RunOptions`]).
+///
+/// Returns the summary of a completed or interrupted run; a solver instability returns
+/// [`RunError::Solver`] after writing the files reached so far (including a frame of the
+/// failing state and the summary with the error).
+pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    if let Some(dir) = &opts.out_dir {
+        prepare_dir(dir, opts.force)?;
+        atomic::write(&dir.join("scene.toml"), scene.text.as_bytes())?;
+    }
+    with_pool(opts, |threads| {
+        model::dispatch(
+            scene,
+            RunJob { opts, resume: None, threads, out_dir: opts.out_dir.clone() },
+        )?
+    })
+}
+
+/// Continues the run in `dir` from its last checkpoint to the scene's end time, writing into
+/// the same directory (`opts.out_dir` and `opts.force` are ignored).
+pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    let path = dir.join(checkpoint::FILE_NAME);
+    if !path.exists() {
+        return Err(RunError::Checkpoint {
+            path,
+            reason: "no checkpoint in this directory (a run writes one on Ctrl-C and every \
+                     output.checkpoint_interval)"
+                .into(),
+        });
+    }
+    let c = checkpoint::read(&path)?;
+    let scene = load_scene_str(&c.scene_text, &c.origin)?;
+    with_pool(opts, |threads| {
+        model::dispatch(
+            &scene,
+            RunJob {
+                opts,
+                resume: Some((c.state, c.history)),
+                threads,
+                out_dir: Some(dir.to_path_buf()),
+            },
+        )?
+    })
+}
+
+fn with_pool<T>(
+    opts: &RunOptions,
+    f: impl FnOnce(usize) -> Result<T, RunError> + Send,
+) -> Result<T, RunError>
+where
+    T: Send,
+{
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = opts.threads {
+        b = b.num_threads(n.max(1));
+    }
+    let pool = b.build().map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
+    pool.install(|| f(rayon::current_num_threads()))
+}
+
+/// refuses a non-empty existing directory unless `force`; creates the layout.
+fn prepare_dir(dir: &Path, force: bool) -> Result<(), RunError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| RunError::Io { path, source }
+    };
+    if dir.exists() {
+        let non_empty = std::fs::read_dir(dir).map_err(io(dir))?.next().is_some();
+        if non_empty && !force {
+            return Err(RunError::OutputExists(dir.to_path_buf()));
+        }
+        if force {
+            // Stale frames of an earlier, longer run would otherwise stay beside the new ones.
+            if let Ok(entries) = std::fs::read_dir(dir.join("frames")) {
+                for e in entries.flatten() {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    if name.starts_with("particles_") && name.ends_with(".vtp") {
+                        let _ = std::fs::remove_file(e.path());
+                    }
+                }
+            }
+            let _ = std::fs::remove_file(dir.join(checkpoint::FILE_NAME));
+        }
+    }
+    for d in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
+        std::fs::create_dir_all(&d).map_err(io(&d))?;
+    }
+    Ok(())
+}
+
+struct RunJob<'a> {
+    opts: &'a RunOptions,
+    resume: Option<(SavedState, History)>,
+    threads: usize,
+    out_dir: Option<PathBuf>,
+}
+
+impl Job for RunJob<'_> {
+    type Output = Result<RunSummary, RunError>;
+
+    fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        self,
+        scene: &Scene,
+        shape: S,
+        materials: Vec<M>,
+    ) -> Self::Output {
+        let r = &scene.r;
+        let (mut solver, history, fresh) = match self.resume {
+            None => {
+                let particles = model::particles(&r.seeds, &materials);
+                let s = Solver::new(shape, materials, particles, r.config)
+                    .map_err(|e| setup_error(scene, &e.to_string()))?;
+                (s, History { dt_min: f64::INFINITY, ..History::default() }, true)
+            }
+            Some((state, history)) => {
+                let dir = self.out_dir.clone().unwrap_or_default();
+                let Some(c) = M::unwrap(state) else {
+                    return Err(RunError::Checkpoint {
+                        path: dir.join(checkpoint::FILE_NAME),
+                        reason: "its material model does not match its scene".into(),
+                    });
+                };
+                let s = Solver::from_checkpoint(shape, materials, r.config, c)
+                    .map_err(|e| setup_error(scene, &e.to_string()))?;
+                (s, history, false)
+            }
+        };
+        let mut driver = Driver {
+            scene,
+            dir: self.out_dir.as_deref(),
+            history,
+            progress: Progress::new(
+                self.opts.quiet,
+                r.end_time,
+                solver.time(),
+                solver.step_count(),
+            ),
+            interrupt: self.opts.interrupt.clone(),
+            stop_after: self.opts.stop_after,
+            io_error: None,
+        };
+        if fresh {
+            let m0 = driver.metrics(&solver);
+            driver.history.initial = Some(m0);
+            driver.record_series(&solver);
+            driver.write_frame(&solver)?;
+            driver.flush_series()?;
+        }
+        let session_steps0 = solver.step_count();
+        let start = Instant::now();
+        let result = solver.run_until(r.end_time, &mut driver);
+        let elapsed = start.elapsed().as_secs_f64();
+        driver.progress.finish();
+        driver.history.wall_time += elapsed;
+        driver.history.particle_steps +=
+            (solver.step_count() - session_steps0) as f64 * solver.particles().len() as f64;
+        if let Some(e) = driver.io_error.take() {
+            return Err(e);
+        }
+        let (status, error) = match &result {
+            Ok(RunEnd::EndTime) => (RunStatus::Completed, None),
+            Ok(RunEnd::Stopped) => (RunStatus::Interrupted, None),
+            Err(e) => (RunStatus::Failed, Some(e.to_string())),
+        };
+        // The checkpoint holds the history as an uninterrupted run has it at this step (the
+        // extra row and frame of the stop below are not part of it).
+        if status == RunStatus::Interrupted {
+            driver.write_checkpoint(&solver)?;
+        }
+        // the final state: a last series row and frame unless this very step was recorded.
+        let t = solver.time();
+        if driver.history.energy.last().is_none_or(|row| row.time < t) {
+            driver.record_series(&solver);
+        }
+        if driver.history.frames.last().is_none_or(|f| f.0 < t) {
+            driver.write_frame(&solver)?;
+        }
+        driver.flush_series()?;
+        let summary = driver.summary(&solver, status, error, self.threads);
+        if let Some(dir) = driver.dir {
+            driver.plots(&solver)?;
+            let json = serde_json::to_string_pretty(&summary)
+                .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
+            atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+        }
+        match result {
+            Err(e) => Err(RunError::Solver { message: e.to_string(), summary: Box::new(summary) }),
+            Ok(_) => Ok(summary),
+        }
+    }
+}
+
+struct Driver<'a> {
+    scene: &'a Scene,
+    dir: Option<&'a Path>,
+    history: History,
+    progress: Progress,
+    interrupt: Option<Arc<AtomicBool>>,
+    stop_after: Option<f64>,
+    io_error: Option<RunError>,
+}
+
+/// A slot time counts as reached when the clock is within this fraction of the interval of it
+/// (round-off of summed steps, never a physical time difference).
+const SLOT_SLACK: f64 = 1e-9;
+
+/// index of the last slot k·interval reached at time t.
+fn slot(t: f64, interval: f64) -> u64 {
+    (t / interval + SLOT_SLACK).floor().max(0.0) as u64
+}
+
+impl Driver<'_> {
+    fn metrics<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> RunoutMetrics {
+        let r = &self.scene.r;
+        let p = solver.particles();
+        let column = match &r.grid {
+            GridBuilt::Terrain(t) => t.cell_width(),
+            GridBuilt::Regular(g) => g.cell_size().x,
+        };
+        summary::runout(
+            solver.time(),
+            &p.position,
+            &p.mass,
+            &r.ground,
+            r.spacing,
+            column,
+            self.history.initial.as_ref(),
+        )
+    }
+
+    fn record_series<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) {
+        let r = &self.scene.r;
+        let t = solver.time();
+        self.history.energy.push(EnergyRow {
+            time: t,
+            step: solver.step_count(),
+            dt: solver.last_report().dt,
+            ledger: solver.energy(),
+        });
+        let p = solver.particles();
+        let direction = r.output.reference.map_or(Vector::X, |rf| rf.direction);
+        for (k, &i) in r.output.probes.iter().enumerate() {
+            let Some(&x) = p.position.get(i) else { continue };
+            let u = x - p.initial_position[i];
+            let v = p.velocity[i];
+            self.history.probes.push(ProbeRow {
+                time: t,
+                probe: k,
+                particle: i,
+                position: [x.x, x.y],
+                displacement: [u.x, u.y],
+                velocity: [v.x, v.y],
+                along: u.dot(direction),
+                reference: r.output.reference.map(|rf| rf.displacement(t)),
+            });
+        }
+        let m = self.metrics(solver);
+        self.history.runout.push(m);
+    }
+
+    fn write_frame<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let r = &self.scene.r;
+        let Some(dir) = self.dir else { return Ok(()) };
+        if !r.output.vtk {
+            return Ok(());
+        }
+        let name = format!("frames/particles_{:06}.vtp", self.history.frames.len());
+        let text =
+            vtk::frame(solver.particles(), solver.materials(), &r.output.fields, solver.time());
+        atomic::write(&dir.join(&name), text.as_bytes())?;
+        self.history.frames.push((solver.time(), name));
+        atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())
+    }
+
+    fn flush_series(&self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        atomic::write(&dir.join("energy.csv"), csv::energy(&self.history.energy).as_bytes())?;
+        atomic::write(&dir.join("runout.csv"), csv::runout(&self.history.runout).as_bytes())?;
+        if !self.scene.r.output.probes.is_empty() {
+            atomic::write(&dir.join("probes.csv"), csv::probes(&self.history.probes).as_bytes())?;
+        }
+        Ok(())
+    }
+
+    fn write_checkpoint<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        checkpoint::write(
+            &dir.join(checkpoint::FILE_NAME),
+            &CheckpointFile {
+                format: checkpoint::FORMAT,
+                code_version: env!("CARGO_PKG_VERSION").to_string(),
+                origin: self.scene.origin.clone(),
+                scene_text: self.scene.text.clone(),
+                state: M::wrap(solver.checkpoint()),
+                history: self.history.clone(),
+            },
+        )
+    }
+
+    fn summary<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+        status: RunStatus,
+        error: Option<String>,
+        threads: usize,
+    ) -> RunSummary {
+        let r = &self.scene.r;
+        let h = &self.history;
+        let steps = solver.step_count();
+        RunSummary {
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene_origin: self.scene.origin.clone(),
+            scene_hash: self.scene.hash(),
+            status,
+            error,
+            particles: solver.particles().len(),
+            scheme: r.config.scheme.name().to_string(),
+            shape_function: r.shape_function.name().to_string(),
+            steps,
+            simulated_time: solver.time(),
+            end_time: r.end_time,
+            dt: DtStats {
+                min: if h.dt_min.is_finite() { h.dt_min } else { 0.0 },
+                max: h.dt_max,
+                mean: if steps > 0 { solver.time() / steps as f64 } else { 0.0 },
+                first: h.dt_first,
+            },
+            wall_time_s: h.wall_time,
+            particle_steps_per_s: if h.wall_time > 0.0 {
+                h.particle_steps / h.wall_time
+            } else {
+                0.0
+            },
+            threads,
+            energy: solver.energy(),
+            runout: h.runout.last().copied().unwrap_or_default(),
+            state_hash: checkpoint::state_hash(&solver.checkpoint()),
+        }
+    }
+
+    fn plots<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let r = &self.scene.r;
+        let Some(dir) = self.dir else { return Ok(()) };
+        if !r.output.plots {
+            return Ok(());
+        }
+        let plot_dir = dir.join("plots");
+        let h = &self.history;
+        let e0 = h.energy.first().map_or(0.0, |r| r.ledger.potential);
+        let line = |name: &str, color, f: &dyn Fn(&EnergyRow) -> f64| Series {
+            name: name.into(),
+            points: h.energy.iter().map(|row| (row.time, f(row))).collect(),
+            style: Style::Line,
+            color,
+        };
+        plots::chart(
+            &plot_dir.join("energy.png"),
+            &Chart {
+                title: "Energy history",
+                x_label: "time (s)",
+                y_label: "energy (J/m)",
+                size: (900, 560),
+                equal_aspect: false,
+            },
+            &[
+                line("kinetic", 0, &|r| r.ledger.kinetic),
+                line("strain", 2, &|r| r.ledger.strain),
+                line("potential − initial", 4, &|r| r.ledger.potential - e0),
+                line("dissipated", 1, &|r| r.ledger.dissipated()),
+                line("external work", 5, &|r| r.ledger.external_work),
+                line("residual (error)", 6, &|r| r.ledger.residual),
+            ],
+        )?;
+        if !r.output.probes.is_empty() {
+            let mut series = Vec::new();
+            for (k, &i) in r.output.probes.iter().enumerate() {
+                series.push(Series {
+                    name: format!("particle {i}"),
+                    points: h
+                        .probes
+                        .iter()
+                        .filter(|p| p.probe == k)
+                        .map(|p| (p.time, p.along))
+                        .collect(),
+                    style: Style::Line,
+                    color: k,
+                });
+            }
+            let label = match r.output.reference {
+                Some(rf) => {
+                    let t_end = solver.time();
+                    let n = 200;
+                    series.push(Series {
+                        name: format!("{} (rigid block)", rf.curve.name()),
+                        points: (0..=n)
+                            .map(|j| {
+                                let t = t_end * j as f64 / n as f64;
+                                (t, rf.displacement(t))
+                            })
+                            .collect(),
+                        style: Style::Dashed,
+                        color: 1,
+                    });
+                    if rf.direction == Vector::X {
+                        "displacement along x (m)"
+                    } else {
+                        "displacement down the slope (m)"
+                    }
+                }
+                None => "displacement along x (m)",
+            };
+            plots::chart(
+                &plot_dir.join("probes.png"),
+                &Chart {
+                    title: "Probe displacement",
+                    x_label: "time (s)",
+                    y_label: label,
+                    size: (900, 560),
+                    equal_aspect: false,
+                },
+                &series,
+            )?;
+        }
+        let runout_line = |name: &str, color, f: &dyn Fn(&RunoutMetrics) -> f64| Series {
+            name: name.into(),
+            points: h.runout.iter().map(|m| (m.time, f(m))).collect(),
+            style: Style::Line,
+            color,
+        };
+        plots::chart(
+            &plot_dir.join("runout.png"),
+            &Chart {
+                title: "Runout",
+                x_label: "time (s)",
+                y_label: "position / thickness (m)",
+                size: (900, 560),
+                equal_aspect: false,
+            },
+            &[
+                runout_line("front x", 0, &|m| m.front_x),
+                runout_line("tail x", 2, &|m| m.tail_x),
+                runout_line("max thickness", 3, &|m| m.max_thickness),
+                runout_line("centre-of-mass travel", 4, &|m| m.com_travel),
+            ],
+        )?;
+        let p = solver.particles();
+        let column = match &r.grid {
+            GridBuilt::Terrain(t) => t.cell_width(),
+            GridBuilt::Regular(g) => g.cell_size().x,
+        };
+        let xs: Vec<f64> = p.position.iter().chain(&p.initial_position).map(|q| q.x).collect();
+        let lo = xs.iter().copied().fold(f64::INFINITY, f64::min) - 0.5;
+        let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.5;
+        let mut ground_sorted: Vec<(f64, f64)> = r
+            .ground
+            .iter()
+            .filter(|g| g.x > lo && g.x < hi)
+            .map(|g| (g.x, g.y))
+            .chain([lo, hi].map(|x| (x, crate::validate::ground_height(&r.ground, x))))
+            .collect();
+        ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let surface = summary::surface(&p.position, &r.ground, r.spacing, column);
+        let title = format!("Deposit at t = {:.3} s", solver.time());
+        plots::chart(
+            &plot_dir.join("deposit.png"),
+            &Chart {
+                title: &title,
+                x_label: "x (m)",
+                y_label: "y (m)",
+                size: (1000, 560),
+                equal_aspect: true,
+            },
+            &[
+                Series {
+                    name: "initial".into(),
+                    points: p.initial_position.iter().map(|q| (q.x, q.y)).collect(),
+                    style: Style::Points,
+                    color: 6,
+                },
+                Series {
+                    name: "final".into(),
+                    points: p.position.iter().map(|q| (q.x, q.y)).collect(),
+                    style: Style::Points,
+                    color: 0,
+                },
+                Series {
+                    name: "free surface".into(),
+                    points: surface.iter().map(|s| (s.0, s.1)).collect(),
+                    style: Style::Line,
+                    color: 1,
+                },
+                Series {
+                    name: "ground".into(),
+                    points: ground_sorted,
+                    style: Style::Thick,
+                    color: 5,
+                },
+            ],
+        )
+    }
+}
+
+impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for Driver<'_> {
+    fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
+        let r = &self.scene.r;
+        let h = &mut self.history;
+        // The step that lands on the end time is shortened; it does not count as the smallest.
+        if report.time < r.end_time * (1.0 - 1e-12) || h.dt_max == 0.0 {
+            h.dt_min = h.dt_min.min(report.dt);
+        }
+        h.dt_max = h.dt_max.max(report.dt);
+        if h.dt_first == 0.0 {
+            h.dt_first = report.dt;
+        }
+        let t = report.time;
+        let series = slot(t, r.output.series_interval);
+        let frame = slot(t, r.output.interval);
+        if series > self.history.series_slot {
+            self.history.series_slot = series;
+            self.record_series(solver);
+        }
+        if frame > self.history.frame_slot {
+            self.history.frame_slot = frame;
+            if let Err(e) = self.write_frame(solver).and_then(|()| self.flush_series()) {
+                self.io_error = Some(e);
+                return ControlFlow::Break(());
+            }
+        }
+        if let Some(every) = r.output.checkpoint_interval {
+            let c = slot(t, every);
+            if c > self.history.checkpoint_slot {
+                self.history.checkpoint_slot = c;
+                if let Err(e) = self.write_checkpoint(solver) {
+                    self.io_error = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
+        }
+        self.progress.update(t, report.step);
+        let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
+        if interrupted || self.stop_after.is_some_and(|s| t >= s) {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}

@@ -1,0 +1,518 @@
+//! The scene file's data model: what a user writes in TOML, before validation.
+//!
+//! Every table refuses unknown fields. Kind-dependent fields (a terrain grid's `profile`, a
+//! Drucker-Prager material's `cohesion`, a rectangle's `min`) are optional here and checked
+//! against their `kind` or `shape` in [`crate::validate`], which can then say which field is
+//! missing or does not belong, with its line and column. `docs/scene-format.md` documents each
+//! field with its unit, default and admissible range.
+//!
+//! Units: SI (m, s, kg, Pa), angles in degrees.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::de::{self, MapAccess, Visitor};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+pub use mpm_solver::Scheme;
+
+/// A whole scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// one-line description, shown by `mpm scenes` and `mpm check`.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// the background grid.
+    pub grid: GridSpec,
+    /// named materials, referred to by `bodies[].material`.
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// bodies filled with material points.
+    pub bodies: Vec<BodySpec>,
+    /// boundary friction laws.
+    #[serde(default)]
+    pub boundaries: BoundariesSpec,
+    /// time stepping.
+    pub solver: SolverSpec,
+    /// what to write.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// Kind of background grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GridKind {
+    /// terrain-following skewed rectangles over a ground polyline (eqs 19–20).
+    Terrain,
+    /// regular Cartesian cells.
+    Regular,
+}
+
+/// What to do with a terrain profile point that is not on a column boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KinkPolicySpec {
+    /// move it horizontally to the nearest column boundary.
+    Snap,
+    /// refuse the scene.
+    Reject,
+}
+
+/// `[grid]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// `"terrain"` or `"regular"`.
+    pub kind: GridKind,
+    /// terrain: column width l (m).
+    #[serde(default)]
+    pub cell_width: Option<f64>,
+    /// terrain: row spacing h, measured vertically (m).
+    #[serde(default)]
+    pub row_height: Option<f64>,
+    /// terrain: cell rows above the ground.
+    #[serde(default)]
+    pub rows: Option<i64>,
+    /// terrain: ground polyline `[[x, y], ...]`, x strictly increasing (m).
+    #[serde(default)]
+    pub profile: Option<Vec<[f64; 2]>>,
+    /// terrain: `"snap"` (default) or `"reject"`.
+    #[serde(default)]
+    pub kink_policy: Option<KinkPolicySpec>,
+    /// regular: lower-left node `[x, y]` (m).
+    #[serde(default)]
+    pub origin: Option<[f64; 2]>,
+    /// regular: cell size `[dx, dy]` (m).
+    #[serde(default)]
+    pub cell: Option<[f64; 2]>,
+    /// regular: number of cells `[nx, ny]`.
+    #[serde(default)]
+    pub cells: Option<[i64; 2]>,
+}
+
+/// Kind of material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialKind {
+    /// linear elasticity (eq 10).
+    Elastic,
+    /// Drucker-Prager with non-associated flow and mixed hardening (eqs 23–25).
+    DruckerPrager,
+}
+
+impl MaterialKind {
+    /// the name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialKind::Elastic => "elastic",
+            MaterialKind::DruckerPrager => "drucker_prager",
+        }
+    }
+}
+
+/// How the Drucker-Prager cone is matched to Mohr-Coulomb.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConeMatchSpec {
+    /// same plane-strain collapse load (the paper's choice).
+    PlaneStrain,
+    /// through the triaxial-extension corners.
+    Inner,
+    /// through the triaxial-compression corners.
+    Outer,
+}
+
+/// `[materials.NAME]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// `"elastic"` or `"drucker_prager"`.
+    pub kind: MaterialKind,
+    /// Young's modulus E (Pa).
+    pub young: f64,
+    /// Poisson's ratio ν.
+    pub poisson: f64,
+    /// initial density ρ (kg/m³).
+    pub density: f64,
+    /// Drucker-Prager: cohesion c (Pa).
+    #[serde(default)]
+    pub cohesion: Option<f64>,
+    /// Drucker-Prager: friction angle φ (degrees).
+    #[serde(default)]
+    pub friction_angle_deg: Option<f64>,
+    /// Drucker-Prager: dilatancy angle ψ (degrees), default 0.
+    #[serde(default)]
+    pub dilatancy_angle_deg: Option<f64>,
+    /// Drucker-Prager: plastic modulus H (Pa), default 0.
+    #[serde(default)]
+    pub hardening_modulus: Option<f64>,
+    /// Drucker-Prager: mixing parameter M (1 isotropic, 0 kinematic), default 1.
+    #[serde(default)]
+    pub mixing: Option<f64>,
+    /// Drucker-Prager: cone match, default `"plane_strain"`.
+    #[serde(default)]
+    pub cone_match: Option<ConeMatchSpec>,
+}
+
+/// Shape of a body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeKind {
+    /// axis-aligned rectangle `min`–`max`.
+    Rectangle,
+    /// simple polygon `vertices`.
+    Polygon,
+    /// rectangle resting on the ground (or any inclined base).
+    OnSlope,
+}
+
+/// `[[bodies]]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// optional label.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// name of a `[materials.NAME]` table.
+    pub material: String,
+    /// `"rectangle"`, `"polygon"` or `"on_slope"`.
+    pub shape: ShapeKind,
+    /// rectangle: lower-left corner (m).
+    #[serde(default)]
+    pub min: Option<[f64; 2]>,
+    /// rectangle: upper-right corner (m).
+    #[serde(default)]
+    pub max: Option<[f64; 2]>,
+    /// polygon: vertices in order (m).
+    #[serde(default)]
+    pub vertices: Option<Vec<[f64; 2]>>,
+    /// on_slope: lower corner of the base (m); or give `base_x` to put it on the ground.
+    #[serde(default)]
+    pub base_start: Option<[f64; 2]>,
+    /// on_slope: x of the base's lower corner, placed on the ground (m).
+    #[serde(default)]
+    pub base_x: Option<f64>,
+    /// on_slope: inclination of the base from +x (degrees, negative descending to the right);
+    /// default: the ground's slope at the base's lower corner.
+    #[serde(default)]
+    pub angle_deg: Option<f64>,
+    /// on_slope: length along the base (m).
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// on_slope: thickness normal to the base (m).
+    #[serde(default)]
+    pub thickness: Option<f64>,
+    /// particles per cell along each axis (n × n per cell), default 2.
+    #[serde(default)]
+    pub particles_per_cell: Option<i64>,
+    /// initial velocity `[vx, vy]` (m/s), default `[0, 0]`.
+    #[serde(default)]
+    pub velocity: Option<[f64; 2]>,
+}
+
+/// `[boundaries]`: absent entries are open (no boundary condition).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundariesSpec {
+    /// the ground (terrain) or floor (regular grid).
+    #[serde(default)]
+    pub ground: Option<BoundarySpec>,
+    /// the wall at the grid's first column.
+    #[serde(default)]
+    pub left_wall: Option<BoundarySpec>,
+    /// the wall at the grid's last column.
+    #[serde(default)]
+    pub right_wall: Option<BoundarySpec>,
+}
+
+/// One boundary's law: `{ friction = μ }`, `{ friction_angle_deg = φ_b }`, `"rough"`, `"fixed"`
+/// or `"frictionless"`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoundarySpec {
+    /// Coulomb friction with coefficient μ.
+    Friction(f64),
+    /// Coulomb friction with μ = tan φ_b (degrees).
+    FrictionAngleDeg(f64),
+    /// no slip while pressed.
+    Rough,
+    /// fixed in both directions.
+    Fixed,
+    /// μ = 0 (a roller).
+    Frictionless,
+}
+
+const BOUNDARY_NAMES: &[&str] = &["rough", "fixed", "frictionless"];
+const BOUNDARY_KEYS: &[&str] = &["friction", "friction_angle_deg"];
+
+impl<'de> Deserialize<'de> for BoundarySpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = BoundarySpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "\"rough\", \"fixed\", \"frictionless\", { friction = μ } or \
+                     { friction_angle_deg = φ }",
+                )
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<BoundarySpec, E> {
+                match v {
+                    "rough" => Ok(BoundarySpec::Rough),
+                    "fixed" => Ok(BoundarySpec::Fixed),
+                    "frictionless" => Ok(BoundarySpec::Frictionless),
+                    other => Err(E::unknown_variant(other, BOUNDARY_NAMES)),
+                }
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<BoundarySpec, A::Error> {
+                let mut out = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    let value: f64 = match key.as_str() {
+                        "friction" | "friction_angle_deg" => map.next_value()?,
+                        other => return Err(de::Error::unknown_field(other, BOUNDARY_KEYS)),
+                    };
+                    if out.is_some() {
+                        return Err(de::Error::custom(
+                            "give either `friction` or `friction_angle_deg`, not both",
+                        ));
+                    }
+                    out = Some(if key == "friction" {
+                        BoundarySpec::Friction(value)
+                    } else {
+                        BoundarySpec::FrictionAngleDeg(value)
+                    });
+                }
+                out.ok_or_else(|| de::Error::missing_field("friction"))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for BoundarySpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let single = |s: S, key: &str, v: f64| {
+            let mut m = s.serialize_map(Some(1))?;
+            m.serialize_entry(key, &v)?;
+            m.end()
+        };
+        match *self {
+            BoundarySpec::Friction(mu) => single(s, "friction", mu),
+            BoundarySpec::FrictionAngleDeg(a) => single(s, "friction_angle_deg", a),
+            BoundarySpec::Rough => s.serialize_str("rough"),
+            BoundarySpec::Fixed => s.serialize_str("fixed"),
+            BoundarySpec::Frictionless => s.serialize_str("frictionless"),
+        }
+    }
+}
+
+/// Shape functions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeFunctionKind {
+    /// bilinear (either grid; the only choice on the terrain grid).
+    Bilinear,
+    /// uGIMP (regular grid).
+    Gimp,
+    /// quadratic B-splines (regular grid).
+    Bspline,
+}
+
+impl ShapeFunctionKind {
+    /// the name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeFunctionKind::Bilinear => "bilinear",
+            ShapeFunctionKind::Gimp => "gimp",
+            ShapeFunctionKind::Bspline => "bspline",
+        }
+    }
+}
+
+/// Named speed/accuracy settings (see [`crate::presets`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// fastest settings of the table.
+    Fast,
+    /// the middle ground.
+    Balanced,
+    /// most accurate settings of the table.
+    Accurate,
+}
+
+/// `[solver]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// named settings for scheme, shape function and Courant number; explicit fields win.
+    #[serde(default)]
+    pub preset: Option<Preset>,
+    /// `"usl"`, `"musl"`, `"usf"` or `"usavg"` (default).
+    #[serde(default)]
+    pub scheme: Option<Scheme>,
+    /// `"bilinear"` (default), `"gimp"` or `"bspline"`.
+    #[serde(default)]
+    pub shape_function: Option<ShapeFunctionKind>,
+    /// Courant number C in (0, 1], default 0.1; exclusive with `dt`.
+    #[serde(default)]
+    pub courant: Option<f64>,
+    /// fixed time step (s); exclusive with `courant`.
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// simulated end time (s).
+    pub end_time: f64,
+    /// gravity `[gx, gy]` (m/s²), default `[0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<[f64; 2]>,
+    /// gravity ramp time (s), default 0.
+    #[serde(default)]
+    pub gravity_ramp: Option<f64>,
+    /// small nodal mass ratio, default 1e-4.
+    #[serde(default)]
+    pub small_mass_ratio: Option<f64>,
+    /// Jaumann stress rate; default on for Drucker-Prager scenes, off for elastic ones.
+    #[serde(default)]
+    pub objective_stress: Option<bool>,
+}
+
+/// A point-data field of the VTK output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtkField {
+    /// Cauchy stress, full 3×3 tensor (Pa).
+    Stress,
+    /// mean stress p = tr σ / 3 (Pa, tension positive).
+    Pressure,
+    /// velocity (m/s).
+    Velocity,
+    /// displacement from the initial position (m).
+    Displacement,
+    /// equivalent plastic strain ε̄ᵖ.
+    PlasticStrain,
+    /// body index.
+    Body,
+    /// material index.
+    Material,
+    /// density (kg/m³).
+    Density,
+}
+
+impl VtkField {
+    /// every field, in output order.
+    pub const ALL: [VtkField; 8] = [
+        VtkField::Stress,
+        VtkField::Pressure,
+        VtkField::Velocity,
+        VtkField::Displacement,
+        VtkField::PlasticStrain,
+        VtkField::Body,
+        VtkField::Material,
+        VtkField::Density,
+    ];
+}
+
+/// A probe: a particle index, or the particle nearest to a point at t = 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ProbeSpec {
+    /// particle index (generation order: bodies in file order, each row by row).
+    Index(i64),
+    /// the particle nearest to `[x, y]` at t = 0.
+    Nearest([f64; 2]),
+}
+
+impl<'de> Deserialize<'de> for ProbeSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = ProbeSpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a particle index or { nearest = [x, y] }")
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ProbeSpec, E> {
+                Ok(ProbeSpec::Index(v))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ProbeSpec, E> {
+                Ok(ProbeSpec::Index(i64::try_from(v).unwrap_or(i64::MAX)))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<ProbeSpec, A::Error> {
+                let mut out = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    if key != "nearest" {
+                        return Err(de::Error::unknown_field(&key, &["nearest"]));
+                    }
+                    out = Some(ProbeSpec::Nearest(map.next_value()?));
+                }
+                out.ok_or_else(|| de::Error::missing_field("nearest"))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for ProbeSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            ProbeSpec::Index(i) => s.serialize_i64(*i),
+            ProbeSpec::Nearest(p) => {
+                let mut m = s.serialize_map(Some(1))?;
+                m.serialize_entry("nearest", p)?;
+                m.end()
+            }
+        }
+    }
+}
+
+/// An analytic curve the probes are compared with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceCurve {
+    /// eq 21: rigid block sliding on a horizontal boundary with initial speed v0,
+    /// x = x0 + v0 t − ½ μ g t² until t = v0/(μg), then constant.
+    Abe2005Eq21,
+    /// eq 22: rigid block sliding from rest down a slope θ, s = ½ g (sinθ − μ cosθ) t² along
+    /// the slope.
+    Abe2005Eq22,
+}
+
+impl ReferenceCurve {
+    /// the name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReferenceCurve::Abe2005Eq21 => "abe2005_eq21",
+            ReferenceCurve::Abe2005Eq22 => "abe2005_eq22",
+        }
+    }
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// time between particle frames (s), default end_time / 50.
+    #[serde(default)]
+    pub interval: Option<f64>,
+    /// time between rows of the CSV time series (s), default min(interval, end_time / 200).
+    #[serde(default)]
+    pub series_interval: Option<f64>,
+    /// VTK point-data fields, default all.
+    #[serde(default)]
+    pub fields: Option<Vec<VtkField>>,
+    /// write VTK frames, default true.
+    #[serde(default)]
+    pub vtk: Option<bool>,
+    /// write PNG plots, default true.
+    #[serde(default)]
+    pub plots: Option<bool>,
+    /// probe particles.
+    #[serde(default)]
+    pub probes: Option<Vec<ProbeSpec>>,
+    /// analytic curve for the probes.
+    #[serde(default)]
+    pub reference: Option<ReferenceCurve>,
+    /// simulated time between checkpoints (s); none by default (a checkpoint is still written on
+    /// Ctrl-C).
+    #[serde(default)]
+    pub checkpoint_interval: Option<f64>,
+}

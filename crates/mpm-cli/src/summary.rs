@@ -1,0 +1,203 @@
+//! What a run reports: [`RunSummary`] (written as `summary.json`) and the runout metrics of a
+//! flow.
+//!
+//! Field names are stable: `cargo xtask` and scripts read them.
+
+use mpm_solver::{EnergyLedger, Vector};
+use serde::{Deserialize, Serialize};
+
+use crate::validate::ground_height;
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// the end time was reached.
+    Completed,
+    /// stopped by Ctrl-C or `RunOptions::stop_after`; a checkpoint was written.
+    Interrupted,
+    /// the solver stopped with an instability (see `error`).
+    Failed,
+}
+
+/// Statistics of the time steps taken (s).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DtStats {
+    /// smallest Δt (the last, shortened step to land on the end time excluded when other steps
+    /// exist).
+    pub min: f64,
+    /// largest Δt.
+    pub max: f64,
+    /// mean Δt = simulated time / steps.
+    pub mean: f64,
+    /// Δt of the first step.
+    pub first: f64,
+}
+
+/// Runout metrics of the material at one instant (m). Horizontal positions are x coordinates;
+/// thickness is measured vertically above the ground.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunoutMetrics {
+    /// simulated time (s).
+    pub time: f64,
+    /// front position of the main mass plus half a particle spacing (m). The main mass: the
+    /// particles sorted by x are split wherever two neighbours are more than one cell width
+    /// apart; the group with the most mass is the main mass (so a few particles thrown ahead do
+    /// not count as the front).
+    pub front_x: f64,
+    /// tail position of the main mass minus half a particle spacing (m).
+    pub tail_x: f64,
+    /// largest x of any particle plus half a particle spacing (m), stray particles included.
+    pub leading_x: f64,
+    /// front travel since t = 0 (m).
+    pub front_travel: f64,
+    /// largest vertical thickness of the material above the ground over columns of one cell
+    /// width: highest particle above the ground plus half a particle spacing (m).
+    pub max_thickness: f64,
+    /// centre of mass x (m).
+    pub com_x: f64,
+    /// centre of mass y (m).
+    pub com_y: f64,
+    /// distance travelled by the centre of mass since t = 0 (m).
+    pub com_travel: f64,
+}
+
+/// Everything a run reports, written as `summary.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// version of the `mpm` crate that ran it.
+    pub code_version: String,
+    /// where the scene came from.
+    pub scene_origin: String,
+    /// FNV-1a 64 hash of the scene text (hex).
+    pub scene_hash: String,
+    /// how the run ended.
+    pub status: RunStatus,
+    /// the solver's message when `status` is `failed`.
+    pub error: Option<String>,
+    /// number of particles.
+    pub particles: usize,
+    /// update scheme (USL, MUSL, USF, USAVG).
+    pub scheme: String,
+    /// shape functions.
+    pub shape_function: String,
+    /// steps taken (over all sessions of a resumed run).
+    pub steps: u64,
+    /// simulated time reached (s).
+    pub simulated_time: f64,
+    /// the scene's end time (s).
+    pub end_time: f64,
+    /// time-step statistics.
+    pub dt: DtStats,
+    /// wall-clock time of the stepping, over all sessions (s).
+    pub wall_time_s: f64,
+    /// particles × steps / wall time.
+    pub particle_steps_per_s: f64,
+    /// rayon threads used.
+    pub threads: usize,
+    /// the energy ledger at the end (J per metre of thickness).
+    pub energy: EnergyLedger,
+    /// runout metrics at the end.
+    pub runout: RunoutMetrics,
+    /// FNV-1a 64 hash (hex) of the final solver state's bytes (particles, clock, dissipation):
+    /// equal hashes mean bit-identical runs.
+    pub state_hash: String,
+}
+
+/// Runout metrics of `positions` (masses `mass`) over `ground`, with particle spacing `spacing`
+/// and column width `column`, relative to the state `initial` (pass `None` at t = 0).
+pub(crate) fn runout(
+    time: f64,
+    positions: &[Vector],
+    mass: &[f64],
+    ground: &[Vector],
+    spacing: f64,
+    column: f64,
+    initial: Option<&RunoutMetrics>,
+) -> RunoutMetrics {
+    let half = 0.5 * spacing;
+    let (tail, front, leading) = main_mass_extent(positions, mass, column);
+    let (mut m_sum, mut mx, mut my) = (0.0, 0.0, 0.0);
+    for (p, &m) in positions.iter().zip(mass) {
+        if p.is_finite() {
+            m_sum += m;
+            mx += m * p.x;
+            my += m * p.y;
+        }
+    }
+    let max_thickness = surface(positions, ground, spacing, column)
+        .iter()
+        .map(|&(_, top, g)| top - g)
+        .fold(0.0, f64::max);
+    let (com_x, com_y) = if m_sum > 0.0 { (mx / m_sum, my / m_sum) } else { (0.0, 0.0) };
+    let front_x = front + half;
+    let (front0, cx0, cy0) =
+        initial.map_or((front_x, com_x, com_y), |i| (i.front_x, i.com_x, i.com_y));
+    RunoutMetrics {
+        time,
+        leading_x: leading + half,
+        front_x,
+        tail_x: tail - half,
+        front_travel: front_x - front0,
+        max_thickness,
+        com_x,
+        com_y,
+        com_travel: (com_x - cx0).hypot(com_y - cy0),
+    }
+}
+
+/// (tail, front, leading) x of the main mass and of all particles, see
+/// [`RunoutMetrics::front_x`].
+fn main_mass_extent(positions: &[Vector], mass: &[f64], gap: f64) -> (f64, f64, f64) {
+    let mut xs: Vec<(f64, f64)> =
+        positions.iter().zip(mass).filter(|(p, _)| p.is_finite()).map(|(p, &m)| (p.x, m)).collect();
+    if xs.is_empty() {
+        return (0.0, 0.0, 0.0);
+    }
+    xs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let leading = xs[xs.len() - 1].0;
+    let (mut best, mut best_mass) = ((xs[0].0, xs[0].0), f64::NEG_INFINITY);
+    let (mut start, mut group_mass) = (0usize, 0.0);
+    for k in 0..xs.len() {
+        group_mass += xs[k].1;
+        let last = k + 1 == xs.len() || xs[k + 1].0 - xs[k].0 > gap;
+        if last {
+            if group_mass > best_mass {
+                best_mass = group_mass;
+                best = (xs[start].0, xs[k].0);
+            }
+            start = k + 1;
+            group_mass = 0.0;
+        }
+    }
+    (best.0, best.1, leading)
+}
+
+/// The free surface: per column of width `column` holding particles, (column centre x, surface
+/// height, ground height), the surface being the highest particle above the ground there plus
+/// half a spacing.
+pub(crate) fn surface(
+    positions: &[Vector],
+    ground: &[Vector],
+    spacing: f64,
+    column: f64,
+) -> Vec<(f64, f64, f64)> {
+    let x0 = ground.first().map_or(0.0, |g| g.x);
+    let mut tops: std::collections::BTreeMap<i64, f64> = std::collections::BTreeMap::new();
+    for p in positions {
+        if !p.is_finite() {
+            continue;
+        }
+        let k = ((p.x - x0) / column).floor() as i64;
+        let h = p.y - ground_height(ground, p.x) + 0.5 * spacing;
+        let e = tops.entry(k).or_insert(f64::NEG_INFINITY);
+        *e = e.max(h);
+    }
+    tops.into_iter()
+        .map(|(k, h)| {
+            let x = x0 + (k as f64 + 0.5) * column;
+            let g = ground_height(ground, x);
+            (x, g + h.max(0.0), g)
+        })
+        .collect()
+}
