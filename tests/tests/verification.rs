@@ -6,4 +6,5 @@ mod verification {
     pub mod bardenhagen2002;
     pub mod guards;
     pub mod objectivity;
+    pub mod small_mass;
 }
