@@ -11,6 +11,9 @@ use mpm_constitutive::element_test::{simple_shear, uniaxial_plane_strain};
 use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor};
 
 use crate::error::RunError;
+
+/// (label, first plot's points, second plot's points) of one case.
+type Curve = (String, Vec<(f64, f64)>, Vec<(f64, f64)>);
 use crate::output::atomic;
 use crate::output::plots::{self, Chart, Series, Style};
 
@@ -97,7 +100,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
          sigma_zz,sigma_xy,eps_p_bar,surface\n",
     );
     let mut results = Vec::new();
-    let mut curves: Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> = Vec::new();
+    let mut curves: Vec<Curve> = Vec::new();
     let dilatancy = if o.dilatancy_deg.is_empty() { vec![0.0] } else { o.dilatancy_deg.clone() };
     let mixing = if o.mixing.is_empty() { vec![1.0] } else { o.mixing.clone() };
     for &psi in &dilatancy {
@@ -169,7 +172,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
         }
     }
     atomic::write(&csv_path, csv.as_bytes())?;
-    let series = |pick: &dyn Fn(&(String, Vec<(f64, f64)>, Vec<(f64, f64)>)) -> Vec<(f64, f64)>| {
+    let series = |pick: &dyn Fn(&Curve) -> Vec<(f64, f64)>| {
         curves
             .iter()
             .enumerate()

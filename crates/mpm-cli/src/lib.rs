@@ -35,6 +35,10 @@
 //! assert!(summary.steps > 0);
 //! ```
 
+// A SceneError carries everything a user needs to fix a scene (file, line, column, path, value,
+// range, fix); it is returned once, before any step, so its size costs nothing.
+#![allow(clippy::result_large_err)]
+
 mod checkpoint;
 mod element;
 mod error;

@@ -298,14 +298,14 @@ fn main() -> ExitCode {
 }
 
 /// A scene file path, or an embedded scene's name when no such file exists.
-fn load(name: &str) -> Result<Scene, SceneError> {
+fn load(name: &str) -> Result<Scene, Box<SceneError>> {
     let path = Path::new(name);
     if !path.is_file() {
         if let Some(text) = mpm_cli::embedded_scene(name) {
-            return mpm_cli::load_scene_str(text, &format!("embedded:{name}"));
+            return mpm_cli::load_scene_str(text, &format!("embedded:{name}")).map_err(Box::new);
         }
     }
-    mpm_cli::load_scene_file(path)
+    mpm_cli::load_scene_file(path).map_err(Box::new)
 }
 
 fn stem(name: &str) -> String {

@@ -136,6 +136,11 @@ impl SourceMap {
         Self { text: text.to_string(), doc: ImDocument::parse(text.to_string()).ok() }
     }
 
+    /// length of the text in bytes.
+    pub(crate) fn len(&self) -> usize {
+        self.text.len()
+    }
+
     /// 1-based (line, column) of byte offset `offset`.
     pub(crate) fn line_col(&self, offset: usize) -> (usize, usize) {
         let mut offset = offset.min(self.text.len());

@@ -318,6 +318,10 @@ fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
             ),
         )
     } else if let Some(field) = quoted("missing field ") {
+        // A span covering the whole text is the top-level table.
+        if span.as_ref().is_some_and(|s| s.start == 0 && s.end + 1 >= ctx.map.len()) {
+            path.clear();
+        }
         if !path.ends_with(&field) {
             path = join(&path, &field);
         }
@@ -697,7 +701,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let (material_kind, _) = kind.unwrap_or((MaterialKind::Elastic, 0));
     let materials = match material_kind {
         MaterialKind::Elastic => MaterialsBuilt::Elastic(
-            used.iter().filter_map(|n| built.get(n).and_then(|b| b.1.clone())).collect(),
+            used.iter().filter_map(|n| built.get(n).and_then(|b| b.1)).collect(),
         ),
         MaterialKind::DruckerPrager => MaterialsBuilt::Plastic(
             used.iter().filter_map(|n| built.get(n).and_then(|b| b.2.clone())).collect(),
