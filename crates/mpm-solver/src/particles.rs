@@ -5,7 +5,7 @@
 //! **tension positive**, full 3D symmetric tensor with σ_zz carried (plane strain).
 //! Each array has one entry per particle; index p refers to the same particle in every array.
 
-use crate::math::{Real, Vector};
+use crate::math::{Matrix, Real, Vector};
 use mpm_constitutive::SymTensor;
 use serde::{Deserialize, Serialize};
 
@@ -30,6 +30,10 @@ pub struct Particles<S> {
     pub body: Vec<u16>,
     /// Position at generation, for displacement output.
     pub initial_position: Vec<Vector>,
+    /// Affine velocity matrix C_p (1/s) of the APIC transfer; empty under FLIP (which pays
+    /// nothing for it). Column-major `glam` matrix: C_p · r is the velocity offset at r.
+    #[serde(default)]
+    pub affine: Vec<Matrix>,
 }
 
 impl<S> Default for Particles<S> {
@@ -44,6 +48,7 @@ impl<S> Default for Particles<S> {
             material: Vec::new(),
             body: Vec::new(),
             initial_position: Vec::new(),
+            affine: Vec::new(),
         }
     }
 }
@@ -82,6 +87,7 @@ impl<S> Particles<S> {
             material: Vec::with_capacity(n),
             body: Vec::with_capacity(n),
             initial_position: Vec::with_capacity(n),
+            affine: Vec::new(),
         }
     }
 
@@ -123,9 +129,13 @@ impl<S> Particles<S> {
         self.mass.iter().zip(&self.velocity).map(|(&m, &v)| m * v).sum()
     }
 
-    /// the arrays' lengths agree (a set built by `push` always satisfies this).
+    /// the arrays' lengths agree (a set built by `push` always satisfies this; `affine` may also
+    /// be empty).
     pub fn is_consistent(&self) -> bool {
         let n = self.len();
+        if !(self.affine.is_empty() || self.affine.len() == n) {
+            return false;
+        }
         [
             self.velocity.len(),
             self.mass.len(),

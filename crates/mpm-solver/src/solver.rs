@@ -21,10 +21,10 @@ use mpm_contact::Boundary;
 use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
 use serde::{Deserialize, Serialize};
 
-use crate::config::{Scheme, SolverConfig};
+use crate::config::{Scheme, SolverConfig, Transfer};
 use crate::energy::{Dissipation, EnergyLedger};
 use crate::error::SolverError;
-use crate::math::{Real, Vector};
+use crate::math::{Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
 
@@ -121,6 +121,8 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) acceleration: Vec<Vector>,
     /// Nodes on a declared boundary.
     pub(crate) boundary: Vec<BoundaryNode>,
+    /// x_i of the active nodes (APIC only; empty under FLIP).
+    pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
     pub(crate) saved: Vec<Vector>,
 }
@@ -140,6 +142,7 @@ impl<const N: usize> Scratch<N> {
             force: Vec::new(),
             acceleration: Vec::new(),
             boundary: Vec::new(),
+            node_position: Vec::new(),
             saved: Vec::new(),
         }
     }
@@ -157,6 +160,7 @@ impl<const N: usize> Scratch<N> {
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
+            + self.node_position.capacity() * size_of::<Vector>()
     }
 }
 
@@ -183,6 +187,8 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) scratch: Scratch<N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
+    /// Particle ↔ grid velocity transfer.
+    pub(crate) transfer: Transfer,
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -254,6 +260,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 cone_returns: 0,
                 apex_returns: 0,
             },
+            transfer: Transfer::Flip,
         };
         // Every particle must be inside the grid before the first step; a failure here is
         // reported at the step already completed (0 for a new run).
@@ -268,6 +275,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             solver.initial_stored = e.stored();
         }
         Ok(solver)
+    }
+
+    /// selects the particle ↔ grid velocity transfer (FLIP by default). Switching to APIC gives
+    /// every particle a zero affine matrix unless `Particles::affine` was filled by the caller
+    /// (with the initial velocity gradient, say).
+    pub fn with_transfer(mut self, transfer: Transfer) -> Self {
+        self.transfer = transfer;
+        match transfer {
+            Transfer::Apic => {
+                let n = self.particles.len();
+                self.particles.affine.resize(n, Matrix::ZERO);
+            }
+            Transfer::Flip => self.particles.affine.clear(),
+        }
+        self
+    }
+
+    /// the particle ↔ grid velocity transfer in use.
+    pub fn transfer(&self) -> Transfer {
+        self.transfer
     }
 
     /// the state needed to continue this run exactly.
@@ -341,6 +368,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             + p.stress.capacity() * size_of::<SymTensor>()
             + p.state.capacity() * size_of::<M::State>()
             + (p.material.capacity() + p.body.capacity()) * size_of::<u16>()
+            + p.affine.capacity() * size_of::<Matrix>()
             + self.scratch.heap_bytes()
     }
 
@@ -376,6 +404,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// advances one step whose Δt is at most `max_dt` (used to land exactly on an end time).
     pub fn step_capped(&mut self, max_dt: Real) -> Result<StepReport, SolverError> {
         let (dt, courant) = self.time_step(max_dt)?;
+        // While gravity ramps, its potential −m g(t)·x changes at fixed x: that is external work,
+        // Σ −m_p Δg·x_p at mid-step positions (the forces use g at mid-step too).
+        let ramping = self.config.gravity_ramp > 0.0 && self.time < self.config.gravity_ramp;
+        let dg = self.config.gravity_at(self.time + dt) - self.config.gravity_at(self.time);
+        let ramp_work_at = |p: &Particles<M::State>| {
+            0.5 * par::sum(p.len(), |i| -p.mass[i] * dg.dot(p.position[i]))
+        };
+        let ramp_work = if ramping { ramp_work_at(&self.particles) } else { 0.0 };
         self.locate()?;
         self.p2g_mass_velocity();
         let (cone, apex) = match self.config.scheme {
@@ -390,7 +426,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
-                self.remap_velocity();
+                self.remap_velocity(dt);
                 self.update_stress(dt)?
             }
             Scheme::Usf => {
@@ -409,14 +445,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
-                self.remap_velocity();
+                self.remap_velocity(dt);
                 self.update_stress(0.5 * dt)?
             }
         };
-        if self.config.gravity_ramp > 0.0 && self.time < self.config.gravity_ramp {
-            let dg = self.config.gravity_at(self.time + dt) - self.config.gravity_at(self.time);
-            let p = &self.particles;
-            self.dissipation.external += par::sum(p.len(), |i| -p.mass[i] * dg.dot(p.position[i]));
+        if ramping {
+            self.dissipation.external += ramp_work + ramp_work_at(&self.particles);
         }
         self.time += dt;
         self.step += 1;

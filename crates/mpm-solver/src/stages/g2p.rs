@@ -7,8 +7,9 @@ use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
+use crate::config::Transfer;
 use crate::error::{Field, SolverError};
-use crate::math::{Real, Vector};
+use crate::math::{Matrix, Real, Vector};
 use crate::par::CHUNK;
 use crate::solver::Solver;
 
@@ -17,6 +18,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &self.scratch;
         let (idx, w) = (&sc.node_index, &sc.weights);
         let (a, v) = (&sc.acceleration, &sc.velocity);
+        if self.transfer == Transfer::Apic {
+            return self.g2p_apic(dt);
+        }
         let step = self.step + 1;
         let failure = self
             .particles
@@ -48,6 +52,55 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     }
                     *x = x_new;
                     *vp = v_new;
+                }
+                Ok(())
+            })
+            .find_first(Result::is_err);
+        match failure {
+            Some(Err(e)) => Err(e),
+            _ => Ok(()),
+        }
+    }
+
+    /// APIC grid to particle: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p.
+    fn g2p_apic(&mut self, dt: Real) -> Result<(), SolverError> {
+        let sc = &self.scratch;
+        let (idx, w, grad) = (&sc.node_index, &sc.weights, &sc.gradients);
+        let (a, v) = (&sc.acceleration, &sc.velocity);
+        let step = self.step + 1;
+        let p = &mut self.particles;
+        let failure = p
+            .position
+            .par_chunks_mut(CHUNK)
+            .zip(p.velocity.par_chunks_mut(CHUNK))
+            .zip(p.affine.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(c, ((xs, vs), cs))| {
+                for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
+                    let q = c * CHUNK + j;
+                    let mut v_new = Vector::ZERO;
+                    let mut c_new = Matrix::ZERO;
+                    for k in 0..N {
+                        let i = idx[q][k] as usize;
+                        let v_end = v[i] + a[i] * dt;
+                        v_new += w[q][k] * v_end;
+                        let g = grad[q][k];
+                        c_new += Matrix::from_cols(v_end * g.x, v_end * g.y);
+                    }
+                    let x_new = *x + dt * v_new;
+                    if !(x_new.is_finite() && v_new.is_finite()) {
+                        let field =
+                            if x_new.is_finite() { Field::Velocity } else { Field::Position };
+                        return Err(SolverError::NonFinite {
+                            step,
+                            particle: q,
+                            position: *x,
+                            field,
+                        });
+                    }
+                    *x = x_new;
+                    *vp = v_new;
+                    *cp = c_new;
                 }
                 Ok(())
             })

@@ -41,7 +41,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             sc.acceleration[i] = out.acceleration;
             // Work the boundary impulse J does over the step at the mean nodal velocity: for a node
             // at rest on the ground it is zero (the reaction does no work), for a sliding node it
-            // is the friction force times the distance slid. Booked as dissipation (≥ 0).
+            // is the friction force times the distance slid. Their sum is the kinetic energy the
+            // impulse takes from the node (midpoint rule), which is what closes the ledger; the
+            // split along the first plane's normal is indicative only, and either part can be
+            // negative in a step where a pressed node was moving away from the wall.
             let mean_v = 0.5 * (sc.velocity[i] + out.velocity);
             let n = b.planes[0].normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));

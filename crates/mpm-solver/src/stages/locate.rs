@@ -10,6 +10,7 @@ use mpm_contact::Boundary;
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
+use crate::config::Transfer;
 use crate::error::SolverError;
 use crate::math::Vector;
 use crate::par::CHUNK;
@@ -102,6 +103,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             v.resize(nodes, Vector::ZERO);
         }
         sc.mass.resize(nodes, 0.0);
+        if self.transfer == Transfer::Apic {
+            sc.node_position.clear();
+            sc.node_position.extend(active.nodes().iter().map(|&n| shape.node_position(n)));
+        }
 
         sc.boundary.clear();
         let b = self.config.boundaries;

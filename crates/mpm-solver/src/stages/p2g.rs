@@ -9,6 +9,7 @@ use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
+use crate::config::Transfer;
 use crate::math::{Real, Vector};
 use crate::solver::Solver;
 
@@ -34,11 +35,28 @@ fn gather<T, const N: usize>(
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// nodal mass (eq 1) and velocity q_i / m_i into `scratch.mass` and `scratch.velocity`.
     pub(crate) fn p2g_mass_velocity(&mut self) {
+        self.momentum_pass(true, 0.0);
+    }
+
+    /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
+    /// old stencils, then the boundary velocity constraint (eq 18).
+    pub(crate) fn remap_velocity(&mut self, dt: Real) {
+        // The stencils are the start-of-step ones, so the affine term must use the start-of-step
+        // positions too: x_p − Δt v_p, exact under APIC (whose G2P moves x_p by Δt v_p).
+        self.momentum_pass(false, dt);
+        self.constrain_velocity();
+    }
+
+    /// v_i = q_i / m_i with q_i = Σ_p m_p S_ip v_p (FLIP) or Σ_p m_p S_ip (v_p + C_p (x_i − x_p))
+    /// (APIC, with particle positions taken back by `dt_back` along v_p); also m_i when
+    /// `with_mass`. One pass over each node's list, in particle order.
+    fn momentum_pass(&mut self, with_mass: bool, dt_back: Real) {
         let sc = &mut self.scratch;
         let p = &self.particles;
         let w = &sc.weights;
         let (start, entry) = (&sc.start, &sc.entry);
-        // One pass over each node's list for both sums (same order as `gather`).
+        let apic = self.transfer == Transfer::Apic;
+        let xi = &sc.node_position;
         sc.mass
             .par_iter_mut()
             .zip(sc.velocity.par_iter_mut())
@@ -50,24 +68,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let (pi, k) = (e as usize / N, e as usize % N);
                     let mw = p.mass[pi] * w[pi][k];
                     ms += mw;
-                    q += mw * p.velocity[pi];
+                    q += if apic {
+                        let x0 = p.position[pi] - dt_back * p.velocity[pi];
+                        mw * (p.velocity[pi] + p.affine[pi] * (xi[i] - x0))
+                    } else {
+                        mw * p.velocity[pi]
+                    };
                 }
-                *m = ms;
+                if with_mass {
+                    *m = ms;
+                }
+                // the remap divides by the same m_i: Σ m_p S_ip over the same list.
                 *v = if ms > 0.0 { q / ms } else { Vector::ZERO };
             });
-    }
-
-    /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
-    /// old stencils, then the boundary velocity constraint (eq 18).
-    pub(crate) fn remap_velocity(&mut self) {
-        let sc = &mut self.scratch;
-        let p = &self.particles;
-        let w = &sc.weights;
-        gather::<_, N>(&sc.start, &sc.entry, &mut sc.velocity, |q, k| {
-            (p.mass[q] * w[q][k]) * p.velocity[q]
-        });
-        divide_by_mass(&sc.mass, &mut sc.velocity);
-        self.constrain_velocity();
     }
 
     /// nodal force f_i^int + f_i^ext (eqs 2–3) into `scratch.force`.
@@ -85,11 +98,4 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             (p.mass[q] * w[q][k]) * g - p.volume[q] * sigma_g
         });
     }
-}
-
-/// v_i ← q_i / m_i; a node with no mass (only zero weights) gets zero velocity.
-fn divide_by_mass(mass: &[f64], velocity: &mut [Vector]) {
-    velocity.par_iter_mut().zip(mass.par_iter()).with_min_len(1024).for_each(|(v, &m)| {
-        *v = if m > 0.0 { *v / m } else { Vector::ZERO };
-    });
 }
