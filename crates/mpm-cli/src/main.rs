@@ -186,7 +186,7 @@ fn main() -> ExitCode {
                     );
                     println!("  initial Δt:       {:.4e} s", r.initial_dt);
                     println!(
-                        "  steps:            about {} to t = {} s",
+                        "  steps:            {} or more to t = {} s (Δt shrinks as the material speeds up or dilates)",
                         r.estimated_steps,
                         scene.end_time()
                     );

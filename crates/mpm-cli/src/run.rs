@@ -108,7 +108,8 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             };
             let frames =
                 if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
-            let per_frame = 60 + 230 * r.output.fields.len() as u64 / 8 * r.seeds.len() as u64;
+            // ASCII VTK: about 60 bytes of points and cells plus 35 per field and particle.
+            let per_frame = 400 + (60 + 35 * r.output.fields.len() as u64) * r.seeds.len() as u64;
             Ok(CheckReport {
                 particles: r.seeds.len(),
                 cells,

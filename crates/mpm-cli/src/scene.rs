@@ -2,7 +2,7 @@
 //!
 //! Every table refuses unknown fields. Kind-dependent fields (a terrain grid's `profile`, a
 //! Drucker-Prager material's `cohesion`, a rectangle's `min`) are optional here and checked
-//! against their `kind` or `shape` in [`crate::validate`], which can then say which field is
+//! against their `kind` or `shape` in `validate.rs`, which can then say which field is
 //! missing or does not belong, with its line and column. `docs/scene-format.md` documents each
 //! field with its unit, default and admissible range.
 //!
