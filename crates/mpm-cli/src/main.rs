@@ -32,7 +32,7 @@ enum Command {
     Run {
         /// a scene file, or the name of an embedded scene (`mpm scenes`).
         scene: Option<String>,
-        /// output directory [default: out/<scene name>].
+        /// output directory [default: out/SCENE_NAME].
         #[arg(long)]
         out: Option<PathBuf>,
         /// worker threads [default: one per core].
