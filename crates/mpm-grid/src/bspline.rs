@@ -78,6 +78,10 @@ impl ShapeFunctions<9> for QuadraticBSpline {
     fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
         self.grid.boundary_normals(node)
     }
+
+    fn mirror(&self, node: NodeId) -> Option<(NodeId, Vector)> {
+        self.grid.mirror(node)
+    }
 }
 
 #[cfg(test)]

@@ -150,7 +150,25 @@ impl RegularGrid {
         self.node_position(c.cell) + a * self.cell
     }
 
-    /// floor for j ≤ 0 (+y), left wall for i ≤ 0 (+x), right wall for i ≥ nx (−x).
+    /// the mirror image of a ghost node across the floor (j < 0), the left wall (i < 0) or the
+    /// right wall (i > nx), with that plane's normal; `None` inside the grid. The floor is checked
+    /// first, so a corner ghost mirrors across the floor.
+    pub fn mirror(&self, node: NodeId) -> Option<(NodeId, Vector)> {
+        let nx = i64::try_from(self.cells[0]).unwrap_or(i64::MAX);
+        if node.j < 0 {
+            Some((NodeId::new(node.i, -node.j), Vector::Y))
+        } else if node.i < 0 {
+            Some((NodeId::new(-node.i, node.j), Vector::X))
+        } else if i64::from(node.i) > nx {
+            // 2 nx − i stays in range: i ≤ nx + 2 for the stencils that reach ghosts.
+            Some((NodeId::new((2 * nx - i64::from(node.i)) as i32, node.j), Vector::NEG_X))
+        } else {
+            None
+        }
+    }
+
+    /// boundary planes a node lies on: floor (j ≤ 0), left wall (i ≤ 0), right wall (i ≥ nx);
+    /// ghost nodes beyond them included.
     pub fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
         BoundaryNormals {
             ground: (node.j <= 0).then_some(Vector::Y),

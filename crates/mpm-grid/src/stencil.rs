@@ -45,4 +45,15 @@ pub trait ShapeFunctions<const N: usize>: Send + Sync {
     /// boundary planes a node lies on (ground/floor j ≤ 0, left wall i ≤ 0, right wall
     /// i ≥ last column), as unit normals pointing into the material.
     fn boundary_normals(&self, node: NodeId) -> BoundaryNormals;
+
+    /// For a ghost node (outside the grid across a boundary plane, reached only by the wide
+    /// stencils of uGIMP and B-splines): its mirror image inside the grid across that plane and
+    /// the plane's unit normal (pointing into the material). A solver that gives the ghost the
+    /// mirrored normal velocity of its image makes the interpolated normal velocity vanish on the
+    /// plane, so material cannot be carried through it. `None` for every other node, and for grids
+    /// without ghost nodes (the default).
+    fn mirror(&self, node: NodeId) -> Option<(NodeId, Vector)> {
+        let _ = node;
+        None
+    }
 }

@@ -121,6 +121,9 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) acceleration: Vec<Vector>,
     /// Nodes on a declared boundary.
     pub(crate) boundary: Vec<BoundaryNode>,
+    /// Ghost nodes across a declared boundary whose mirror image is active: (ghost, image,
+    /// plane normal). Empty for grids without ghost nodes.
+    pub(crate) mirrors: Vec<(u32, u32, Vector)>,
     /// x_i of the active nodes (APIC only; empty under FLIP).
     pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -143,6 +146,7 @@ impl<const N: usize> Scratch<N> {
             acceleration: Vec::new(),
             boundary: Vec::new(),
             node_position: Vec::new(),
+            mirrors: Vec::new(),
             saved: Vec::new(),
         }
     }
@@ -160,6 +164,7 @@ impl<const N: usize> Scratch<N> {
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
+            + self.mirrors.capacity() * size_of::<(u32, u32, Vector)>()
             + self.node_position.capacity() * size_of::<Vector>()
     }
 }

@@ -53,6 +53,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         self.dissipation.friction += friction;
         self.dissipation.constraint += constraint;
+
+        // Ghost nodes take the mirrored normal velocity of their image, so that the interpolated
+        // normal velocity vanishes on the boundary plane (images are interior nodes, final above).
+        for &(g, j, n) in &sc.mirrors {
+            let (g, j) = (g as usize, j as usize);
+            let v_ghost = sc.velocity[g] + sc.acceleration[g] * dt;
+            let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
+            let mirrored = v_ghost - (v_ghost.dot(n) + v_image.dot(n)) * n;
+            sc.acceleration[g] = (mirrored - sc.velocity[g]) / dt;
+        }
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
@@ -79,6 +89,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             sc.saved.push(sc.velocity[i]);
             sc.velocity[i] =
                 constrain_velocity_all(&b.planes[..usize::from(b.count)], sc.velocity[i]);
+        }
+        // Ghosts mirror their images' normal velocity here too (they are boundary nodes, so the
+        // loop above saved them).
+        for &(g, j, n) in &sc.mirrors {
+            let (g, j) = (g as usize, j as usize);
+            let (v_ghost, v_image) = (sc.velocity[g], sc.velocity[j]);
+            sc.velocity[g] = v_ghost - (v_ghost.dot(n) + v_image.dot(n)) * n;
         }
     }
 

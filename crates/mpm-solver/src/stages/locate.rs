@@ -109,6 +109,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
 
         sc.boundary.clear();
+        sc.mirrors.clear();
         let b = self.config.boundaries;
         if b.any() {
             for (i, &node) in active.nodes().iter().enumerate() {
@@ -130,6 +131,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     }
                 }
                 if let Some(first) = planes[0] {
+                    if let Some((image, normal)) = shape.mirror(node) {
+                        if let Some(j) = active.index_of(image) {
+                            sc.mirrors.push((i as u32, j as u32, normal));
+                        }
+                    }
                     sc.boundary.push(BoundaryNode {
                         node: i as u32,
                         count: count as u8,
