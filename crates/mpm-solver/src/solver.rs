@@ -124,6 +124,9 @@ pub(crate) struct Scratch<const N: usize> {
     /// Ghost nodes across a declared boundary whose mirror image is active: (ghost, image,
     /// plane normal). Empty for grids without ghost nodes.
     pub(crate) mirrors: Vec<(u32, u32, Vector)>,
+    /// The arrays below `node_ids` describe the current `node_ids` (false before the first
+    /// locate and after a failed one).
+    pub(crate) located: bool,
     /// x_i of the active nodes (APIC only; empty under FLIP).
     pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -146,6 +149,7 @@ impl<const N: usize> Scratch<N> {
             acceleration: Vec::new(),
             boundary: Vec::new(),
             node_position: Vec::new(),
+            located: false,
             mirrors: Vec::new(),
             saved: Vec::new(),
         }
@@ -287,6 +291,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// (with the initial velocity gradient, say).
     pub fn with_transfer(mut self, transfer: Transfer) -> Self {
         self.transfer = transfer;
+        // APIC needs the node positions that a full locate computes: do not reuse the last one.
+        self.scratch.located = false;
         match transfer {
             Transfer::Apic => {
                 let n = self.particles.len();
