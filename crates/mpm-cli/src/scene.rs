@@ -15,7 +15,7 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-pub use mpm_solver::Scheme;
+pub use mpm_solver::{Scheme, Transfer};
 
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -375,6 +375,9 @@ pub struct SolverSpec {
     /// Jaumann stress rate; default on for Drucker-Prager scenes, off for elastic ones.
     #[serde(default)]
     pub objective_stress: Option<bool>,
+    /// velocity transfer: `"flip"` (default, the paper's) or `"apic"` (affine; keeps rotation).
+    #[serde(default)]
+    pub transfer: Option<Transfer>,
 }
 
 /// A point-data field of the VTK output.

@@ -116,6 +116,8 @@ pub struct SolverConfig {
     /// once. A ramp a few times longer than the body's lowest natural period loads it quasi-
     /// statically, instead of dropping a stress-free body into an undamped elastic bounce.
     pub gravity_ramp: Real,
+    /// Particle ↔ grid velocity transfer: FLIP (the paper's, default) or APIC.
+    pub transfer: Transfer,
 }
 
 impl Default for SolverConfig {
@@ -128,6 +130,7 @@ impl Default for SolverConfig {
             small_mass_ratio: 1e-4,
             objective_stress: false,
             gravity_ramp: 0.0,
+            transfer: Transfer::Flip,
         }
     }
 }

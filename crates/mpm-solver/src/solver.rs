@@ -196,8 +196,6 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) scratch: Scratch<N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
-    /// Particle ↔ grid velocity transfer.
-    pub(crate) transfer: Transfer,
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -243,6 +241,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 expected: "between 1 and 65536 materials",
             });
         }
+        let mut particles = particles;
+        match config.transfer {
+            // APIC starts from C_p = 0 unless the caller filled the affine matrices (with the
+            // initial velocity gradient, say); FLIP carries none.
+            Transfer::Apic if particles.affine.is_empty() => {
+                particles.affine.resize(particles.len(), Matrix::ZERO);
+            }
+            Transfer::Apic => {}
+            Transfer::Flip => particles.affine = Vec::new(),
+        }
         validate_particles(&particles, materials.len())?;
         let mean_mass = particles.total_mass() / particles.len() as Real;
         let cell_size = shape.min_cell_size();
@@ -269,7 +277,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 cone_returns: 0,
                 apex_returns: 0,
             },
-            transfer: Transfer::Flip,
         };
         // Every particle must be inside the grid before the first step; a failure here is
         // reported at the step already completed (0 for a new run).
@@ -284,28 +291,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             solver.initial_stored = e.stored();
         }
         Ok(solver)
-    }
-
-    /// selects the particle ↔ grid velocity transfer (FLIP by default). Switching to APIC gives
-    /// every particle a zero affine matrix unless `Particles::affine` was filled by the caller
-    /// (with the initial velocity gradient, say).
-    pub fn with_transfer(mut self, transfer: Transfer) -> Self {
-        self.transfer = transfer;
-        // APIC needs the node positions that a full locate computes: do not reuse the last one.
-        self.scratch.located = false;
-        match transfer {
-            Transfer::Apic => {
-                let n = self.particles.len();
-                self.particles.affine.resize(n, Matrix::ZERO);
-            }
-            Transfer::Flip => self.particles.affine.clear(),
-        }
-        self
-    }
-
-    /// the particle ↔ grid velocity transfer in use.
-    pub fn transfer(&self) -> Transfer {
-        self.transfer
     }
 
     /// the state needed to continue this run exactly.

@@ -72,12 +72,15 @@ fn apic_spinning_square_stays_stress_free_and_keeps_its_spin() {
         particles.velocity[i] = spin * (particles.position[i] - centre);
     }
     particles.affine = vec![spin; particles.len()];
-    let config =
-        SolverConfig { gravity: Vector::ZERO, objective_stress: true, ..Default::default() };
+    let config = SolverConfig {
+        gravity: Vector::ZERO,
+        objective_stress: true,
+        transfer: Transfer::Apic,
+        ..Default::default()
+    };
     let material = LinearElastic::from_young_poisson(e, 0.3).unwrap();
-    let mut s = Solver::new(QuadraticBSpline::new(grid), vec![material], particles, config)
-        .unwrap()
-        .with_transfer(Transfer::Apic);
+    let mut s =
+        Solver::new(QuadraticBSpline::new(grid), vec![material], particles, config).unwrap();
     let l0 = angular_momentum(s.particles());
     s.run_until(0.1, &mut ()).unwrap();
     let worst = s.particles().stress.iter().map(|t| t.norm()).fold(0.0, f64::max);

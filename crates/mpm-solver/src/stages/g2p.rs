@@ -18,7 +18,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &self.scratch;
         let (idx, w) = (&sc.node_index, &sc.weights);
         let (a, v) = (&sc.acceleration, &sc.velocity);
-        if self.transfer == Transfer::Apic {
+        if self.config.transfer == Transfer::Apic {
             return self.g2p_apic(dt);
         }
         let step = self.step + 1;

@@ -123,7 +123,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             v.resize(nodes, Vector::ZERO);
         }
         sc.mass.resize(nodes, 0.0);
-        if self.transfer == Transfer::Apic {
+        if self.config.transfer == Transfer::Apic {
             sc.node_position.clear();
             sc.node_position.extend(active.nodes().iter().map(|&n| shape.node_position(n)));
         }

@@ -55,7 +55,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let p = &self.particles;
         let w = &sc.weights;
         let (start, entry) = (&sc.start, &sc.entry);
-        let apic = self.transfer == Transfer::Apic;
+        let apic = self.config.transfer == Transfer::Apic;
         let xi = &sc.node_position;
         sc.mass
             .par_iter_mut()
