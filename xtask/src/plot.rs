@@ -7,9 +7,9 @@ use anyhow::{Context, Result, anyhow};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-/// DejaVu Sans (license in `assets/DejaVuSans.LICENSE`): plotters draws text only with a
-/// registered font.
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+/// DejaVu Sans, the one copy in the workspace (the CLI's; license next to it): plotters draws
+/// text only with a registered font.
+static FONT: &[u8] = include_bytes!("../../crates/mpm-cli/assets/DejaVuSans.ttf");
 
 static REGISTER: Once = Once::new();
 
