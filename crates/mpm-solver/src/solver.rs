@@ -91,6 +91,31 @@ pub(crate) struct BoundaryNode {
     pub(crate) node: u32,
     pub(crate) count: u8,
     pub(crate) planes: [Boundary; 3],
+    /// For a ghost node of a wide stencil: its image across the plane.
+    pub(crate) mirror: Option<Mirror>,
+}
+
+/// The mirror image of a ghost node (a node outside the grid, reached by wide stencils) across a
+/// boundary plane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Mirror {
+    /// Dense index of the image node.
+    pub(crate) image: u32,
+    /// The plane's unit normal, into the material.
+    pub(crate) normal: Vector,
+    /// A `Fixed` plane holds the material in both directions.
+    pub(crate) fixed: bool,
+}
+
+impl Mirror {
+    /// The velocity of the "wall" a ghost node meets: the velocity interpolated on the plane has
+    /// the normal part (v_ghost + v_image)·n times a positive weight (the node on the plane is held
+    /// by the contact law), so the ghost must not move into the plane faster than −v_image·n.
+    /// Contact is applied to the ghost in the frame of a wall moving at that normal velocity:
+    /// unilateral, with friction on the impulse that actually supports the material.
+    pub(crate) fn wall_velocity(&self, image: Vector) -> Vector {
+        -image.dot(self.normal) * self.normal
+    }
 }
 
 /// Per-step memory, reused between steps (no allocation once the material stops growing).
@@ -121,9 +146,6 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) acceleration: Vec<Vector>,
     /// Nodes on a declared boundary.
     pub(crate) boundary: Vec<BoundaryNode>,
-    /// Ghost nodes across a declared boundary whose mirror image is active: (ghost, image,
-    /// plane normal). Empty for grids without ghost nodes.
-    pub(crate) mirrors: Vec<(u32, u32, Vector)>,
     /// The arrays below `node_ids` describe the current `node_ids` (false before the first
     /// locate and after a failed one).
     pub(crate) located: bool,
@@ -150,7 +172,6 @@ impl<const N: usize> Scratch<N> {
             boundary: Vec::new(),
             node_position: Vec::new(),
             located: false,
-            mirrors: Vec::new(),
             saved: Vec::new(),
         }
     }
@@ -168,7 +189,6 @@ impl<const N: usize> Scratch<N> {
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
-            + self.mirrors.capacity() * size_of::<(u32, u32, Vector)>()
             + self.node_position.capacity() * size_of::<Vector>()
     }
 }

@@ -11,7 +11,7 @@ use mpm_contact::{apply_all, constrain_velocity_all};
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
-use crate::math::Real;
+use crate::math::{Real, Vector};
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -31,21 +31,34 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (mut friction, mut constraint) = (0.0, 0.0);
         for b in &sc.boundary {
             let i = b.node as usize;
-            let out = apply_all(
-                &b.planes[..usize::from(b.count)],
-                sc.mass[i],
-                sc.velocity[i],
-                sc.acceleration[i],
-                dt,
-            );
+            let planes = &b.planes[..usize::from(b.count)];
+            // A ghost node meets a wall moving with its image's mirrored normal velocity (images
+            // are interior nodes, final above); a node on the plane meets a wall at rest.
+            let wall = match b.mirror {
+                Some(m) => {
+                    let j = m.image as usize;
+                    let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
+                    if m.fixed {
+                        // A fixed plane: the velocity field is antisymmetric across it.
+                        sc.acceleration[i] = (-v_image - sc.velocity[i]) / dt;
+                        continue;
+                    }
+                    m.wall_velocity(v_image)
+                }
+                None => Vector::ZERO,
+            };
+            let v_rel = sc.velocity[i] - wall;
+            let out = apply_all(planes, sc.mass[i], v_rel, sc.acceleration[i], dt);
+            // v^L = v_rel + a Δt + wall = v + a Δt: the identity still holds.
             sc.acceleration[i] = out.acceleration;
-            // Work the boundary impulse J does over the step at the mean nodal velocity: for a node
-            // at rest on the ground it is zero (the reaction does no work), for a sliding node it
-            // is the friction force times the distance slid. Their sum is the kinetic energy the
-            // impulse takes from the node (midpoint rule), which is what closes the ledger; the
-            // split along the first plane's normal is indicative only, and either part can be
-            // negative in a step where a pressed node was moving away from the wall.
-            let mean_v = 0.5 * (sc.velocity[i] + out.velocity);
+            // Work the boundary impulse J does over the step at the mean nodal velocity relative
+            // to the wall: for a node at rest on the ground it is zero (the reaction does no
+            // work), for a sliding node it is the friction force times the distance slid. Their
+            // sum is the kinetic energy the impulse takes from the node (midpoint rule), which is
+            // what closes the ledger; the split along the first plane's normal is indicative
+            // only, and either part can be negative in a step where a pressed node was moving
+            // away from the wall.
+            let mean_v = 0.5 * (v_rel + out.velocity);
             let n = b.planes[0].normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));
             constraint -= jn * vn;
@@ -53,16 +66,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         self.dissipation.friction += friction;
         self.dissipation.constraint += constraint;
-
-        // Ghost nodes take the mirrored normal velocity of their image, so that the interpolated
-        // normal velocity vanishes on the boundary plane (images are interior nodes, final above).
-        for &(g, j, n) in &sc.mirrors {
-            let (g, j) = (g as usize, j as usize);
-            let v_ghost = sc.velocity[g] + sc.acceleration[g] * dt;
-            let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
-            let mirrored = v_ghost - (v_ghost.dot(n) + v_image.dot(n)) * n;
-            sc.acceleration[g] = (mirrored - sc.velocity[g]) / dt;
-        }
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
@@ -87,15 +90,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         for b in &sc.boundary {
             let i = b.node as usize;
             sc.saved.push(sc.velocity[i]);
-            sc.velocity[i] =
-                constrain_velocity_all(&b.planes[..usize::from(b.count)], sc.velocity[i]);
         }
-        // Ghosts mirror their images' normal velocity here too (they are boundary nodes, so the
-        // loop above saved them).
-        for &(g, j, n) in &sc.mirrors {
-            let (g, j) = (g as usize, j as usize);
-            let (v_ghost, v_image) = (sc.velocity[g], sc.velocity[j]);
-            sc.velocity[g] = v_ghost - (v_ghost.dot(n) + v_image.dot(n)) * n;
+        for b in &sc.boundary {
+            let i = b.node as usize;
+            let planes = &b.planes[..usize::from(b.count)];
+            let wall = match b.mirror {
+                Some(m) if m.fixed => {
+                    sc.velocity[i] = -sc.velocity[m.image as usize];
+                    continue;
+                }
+                Some(m) => m.wall_velocity(sc.velocity[m.image as usize]),
+                None => Vector::ZERO,
+            };
+            sc.velocity[i] = constrain_velocity_all(planes, sc.velocity[i] - wall) + wall;
         }
     }
 

@@ -6,7 +6,7 @@
 //! that lie on a declared boundary.
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_contact::Boundary;
+use mpm_contact::{Boundary, Friction};
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
@@ -14,7 +14,7 @@ use crate::config::Transfer;
 use crate::error::SolverError;
 use crate::math::Vector;
 use crate::par::CHUNK;
-use crate::solver::{BoundaryNode, Solver};
+use crate::solver::{BoundaryNode, Mirror, Solver};
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     pub(crate) fn locate(&mut self) -> Result<(), SolverError> {
@@ -129,7 +129,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
 
         sc.boundary.clear();
-        sc.mirrors.clear();
         let b = self.config.boundaries;
         if b.any() {
             for (i, &node) in active.nodes().iter().enumerate() {
@@ -151,15 +150,18 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     }
                 }
                 if let Some(first) = planes[0] {
-                    if let Some((image, normal)) = shape.mirror(node) {
-                        if let Some(j) = active.index_of(image) {
-                            sc.mirrors.push((i as u32, j as u32, normal));
-                        }
-                    }
+                    let mirror = shape.mirror(node).and_then(|(image, normal)| {
+                        let fixed = planes
+                            .iter()
+                            .flatten()
+                            .any(|p| p.normal() == normal && p.friction() == Friction::Fixed);
+                        active.index_of(image).map(|j| Mirror { image: j as u32, normal, fixed })
+                    });
                     sc.boundary.push(BoundaryNode {
                         node: i as u32,
                         count: count as u8,
                         planes: planes.map(|b| b.unwrap_or(first)),
+                        mirror,
                     });
                 }
             }
