@@ -4,9 +4,9 @@
 //! given explicitly in `[solver]` wins over the preset. On the terrain grid only bilinear shape
 //! functions exist, so there a preset's shape function is replaced by bilinear.
 //!
-//! **The values below are placeholders** chosen from the paper's advice (USAVG, C ≈ 0.1) and
-//! the usual ranking of shape functions; `cargo xtask` measures the speed/accuracy trade
-//! (SPEC §7) and updates this table from the measured Pareto front.
+//! The values come from the Pareto front of error against wall time that `cargo xtask study`
+//! measures (SPEC §7) on the sliding block, the vibrating bar and the flume; the study rewrites
+//! this table. The figures of each preset are in the table's doc comment and the README.
 
 use mpm_solver::Scheme;
 
@@ -24,9 +24,9 @@ pub struct PresetSettings {
 }
 
 /// The table: (preset, settings), measured by `cargo xtask study` (README, "Speed and accuracy"):
-/// fast: sliding block 0.237 %, bar 0.768 %, flume 2.963 % (worse of error and energy residual), 1.54 s.
-/// balanced: sliding block 0.068 %, bar 0.488 %, flume 2.950 % (worse of error and energy residual), 2.73 s.
-/// accurate: sliding block 0.112 %, bar 0.369 %, flume 0.247 % (worse of error and energy residual), 5.84 s.
+/// fast: sliding block 0.240 %, bar 0.768 %, flume 2.963 % (worse of error and energy residual), 1.34 s.
+/// balanced: sliding block 0.066 %, bar 0.488 %, flume 2.950 % (worse of error and energy residual), 2.78 s.
+/// accurate: sliding block 0.109 %, bar 0.369 %, flume 0.247 % (worse of error and energy residual), 5.06 s.
 pub const PRESETS: [(Preset, PresetSettings); 3] = [
     (
         Preset::Fast,
