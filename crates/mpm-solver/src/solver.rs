@@ -429,23 +429,23 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         };
         let ramp_work = if ramping { ramp_work_at(&self.particles) } else { 0.0 };
         self.locate()?;
-        self.p2g_mass_velocity();
         let (cone, apex) = match self.config.scheme {
             Scheme::Usl => {
-                self.p2g_force(dt);
+                self.p2g_all(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.advance_velocity(dt);
                 self.update_stress(dt)?
             }
             Scheme::Musl => {
-                self.p2g_force(dt);
+                self.p2g_all(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
                 self.update_stress(dt)?
             }
             Scheme::Usf => {
+                self.p2g_mass_velocity();
                 self.constrain_velocity();
                 let counts = self.update_stress(dt)?;
                 self.unconstrain_velocity();
@@ -455,6 +455,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 counts
             }
             Scheme::Usavg => {
+                self.p2g_mass_velocity();
                 self.constrain_velocity();
                 self.update_stress(0.5 * dt)?;
                 self.unconstrain_velocity();

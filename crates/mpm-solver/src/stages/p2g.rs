@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use crate::config::Transfer;
 use crate::math::{Real, Vector};
+use crate::particles::Particles;
 use crate::solver::Solver;
 
 /// For every node i: out[i] = Σ over its entries e of `term(p, k)` with e = p·N + k.
@@ -47,6 +48,37 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.constrain_velocity();
     }
 
+    /// mass, velocity and force in one pass over each node's list (USL and MUSL, whose force
+    /// uses the stress of the previous step): a third less memory traffic than separate passes,
+    /// and the same sums in the same order.
+    pub(crate) fn p2g_all(&mut self, dt: Real) {
+        let sc = &mut self.scratch;
+        let p = &self.particles;
+        let (w, grad) = (&sc.weights, &sc.gradients);
+        let (start, entry) = (&sc.start, &sc.entry);
+        let apic = self.config.transfer == Transfer::Apic;
+        let xi = &sc.node_position;
+        let g = self.config.gravity_at(self.time + 0.5 * dt);
+        sc.mass
+            .par_iter_mut()
+            .zip(sc.velocity.par_iter_mut().zip(sc.force.par_iter_mut()))
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (m, (v, f)))| {
+                let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
+                for &e in &entry[start[i] as usize..start[i + 1] as usize] {
+                    let (pi, k) = (e as usize / N, e as usize % N);
+                    let mw = p.mass[pi] * w[pi][k];
+                    ms += mw;
+                    q += momentum(p, pi, mw, apic, xi.get(i), 0.0);
+                    fs += force(p, pi, mw, grad[pi][k], g);
+                }
+                *m = ms;
+                *v = if ms > 0.0 { q / ms } else { Vector::ZERO };
+                *f = fs;
+            });
+    }
+
     /// v_i = q_i / m_i with q_i = Σ_p m_p S_ip v_p (FLIP) or Σ_p m_p S_ip (v_p + C_p (x_i − x_p))
     /// (APIC, with particle positions taken back by `dt_back` along v_p); also m_i when
     /// `with_mass`. One pass over each node's list, in particle order.
@@ -68,12 +100,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let (pi, k) = (e as usize / N, e as usize % N);
                     let mw = p.mass[pi] * w[pi][k];
                     ms += mw;
-                    q += if apic {
-                        let x0 = p.position[pi] - dt_back * p.velocity[pi];
-                        mw * (p.velocity[pi] + p.affine[pi] * (xi[i] - x0))
-                    } else {
-                        mw * p.velocity[pi]
-                    };
+                    q += momentum(p, pi, mw, apic, xi.get(i), dt_back);
                 }
                 if with_mass {
                     *m = ms;
@@ -91,11 +118,36 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // Gravity at mid-step (it only changes during a ramp).
         let g = self.config.gravity_at(self.time + 0.5 * dt);
         gather::<_, N>(&sc.start, &sc.entry, &mut sc.force, |q, k| {
-            let s = &p.stress[q];
-            let gr = grad[q][k];
-            // σ·G in the plane (tension positive, so −V σ·G pulls nodes towards stretched regions).
-            let sigma_g = Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
-            (p.mass[q] * w[q][k]) * g - p.volume[q] * sigma_g
+            force(p, q, p.mass[q] * w[q][k], grad[q][k], g)
         });
     }
+}
+
+/// particle `q`'s share of a node's momentum, `mw` = m_q S_iq: mw v_q (FLIP), or
+/// mw (v_q + C_q (x_i − x_q)) with x_q taken back by `dt_back` along v_q (APIC).
+#[inline(always)]
+fn momentum<S>(
+    p: &Particles<S>,
+    q: usize,
+    mw: Real,
+    apic: bool,
+    node_position: Option<&Vector>,
+    dt_back: Real,
+) -> Vector {
+    match (apic, node_position) {
+        (true, Some(&xi)) => {
+            let x0 = p.position[q] - dt_back * p.velocity[q];
+            mw * (p.velocity[q] + p.affine[q] * (xi - x0))
+        }
+        _ => mw * p.velocity[q],
+    }
+}
+
+/// particle `q`'s share of a node's force: m_q S_iq b − V_q σ_q · G_iq (eqs 2–3). Tension
+/// positive, so −V σ·G pulls nodes towards stretched regions.
+#[inline(always)]
+fn force<S>(p: &Particles<S>, q: usize, mw: Real, gr: Vector, g: Vector) -> Vector {
+    let s = &p.stress[q];
+    let sigma_g = Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
+    mw * g - p.volume[q] * sigma_g
 }
