@@ -14,8 +14,6 @@ pub enum Field {
     Position,
     /// Velocity v_p.
     Velocity,
-    /// Stress σ_p.
-    Stress,
     /// Volume V_p (and so density).
     Volume,
 }
@@ -25,7 +23,6 @@ impl std::fmt::Display for Field {
         f.write_str(match self {
             Field::Position => "position",
             Field::Velocity => "velocity",
-            Field::Stress => "stress",
             Field::Volume => "volume",
         })
     }

@@ -13,7 +13,7 @@ use mpm_constitutive::{ConstitutiveModel, Surface, SymTensor};
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
 
-use crate::error::{Field, SolverError};
+use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::CHUNK;
 use crate::solver::Solver;
@@ -94,15 +94,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                                 Surface::Elastic => {}
                             }
                         }
+                        // No finiteness check of the new stress: the model returns a finite
+                        // stress or an error for finite input (ConstitutiveModel::update), and a
+                        // stress that an absurd increment overflowed is refused as input at the
+                        // next step, naming the particle.
                         volume[j] *= ratio;
-                        if !stress[j].is_finite() {
-                            return Err(SolverError::NonFinite {
-                                step,
-                                particle: q,
-                                position: position[q],
-                                field: Field::Stress,
-                            });
-                        }
                     }
                     Ok(tally)
                 })
