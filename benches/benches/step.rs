@@ -12,48 +12,8 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic, SymTensor,
+    ConeMatch, ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic,
 };
-use mpm_contact::Friction;
-use mpm_grid::{Bilinear, RegularGrid};
-use mpm_solver::generate::{Shape, fill};
-use mpm_solver::{Boundaries, NewParticle, Particles, Scheme, Solver, SolverConfig, Vector};
-
-/// A square body of about `n` particles (2 × 2 per cell) resting on a frictional floor.
-fn scene<M: ConstitutiveModel>(n: usize, model: M) -> Solver<M, Bilinear<RegularGrid>, 4> {
-    let cells_side = ((n / 4) as f64).sqrt().round() as usize;
-    let cell = 1.0 / cells_side as f64;
-    let grid = RegularGrid::new(
-        Vector::new(-0.5, 0.0),
-        Vector::splat(cell),
-        [2 * cells_side, 2 * cells_side],
-    )
-    .unwrap();
-    let state = model.initial_state();
-    let mut particles = Particles::with_capacity(n);
-    for s in fill(&Shape::Rectangle { min: Vector::ZERO, max: Vector::ONE }, cell / 2.0) {
-        particles.push(NewParticle {
-            position: s.position,
-            velocity: Vector::ZERO,
-            volume: s.area,
-            density: 1600.0,
-            stress: SymTensor::ZERO,
-            state,
-            material: 0,
-            body: 0,
-        });
-    }
-    let config = SolverConfig {
-        scheme: Scheme::Musl,
-        boundaries: Boundaries {
-            ground: Some(Friction::Coulomb { mu: 0.5 }),
-            ..Default::default()
-        },
-        objective_stress: M::IS_PLASTIC,
-        ..Default::default()
-    };
-    Solver::new(Bilinear(grid), vec![model], particles, config).unwrap()
-}
 
 fn sand() -> DruckerPrager {
     DruckerPrager::new(DruckerPragerParams {
@@ -73,7 +33,7 @@ fn bench_model<M: ConstitutiveModel + Clone>(c: &mut Criterion, name: &str, mode
     let mut group = c.benchmark_group(format!("step/{name}"));
     group.sample_size(10);
     for n in [10_000usize, 100_000, 1_000_000] {
-        let mut solver = scene(n, model.clone());
+        let mut solver = mpm_benches::square_on_floor(n, model.clone());
         // Settle the first transients and warm the scratch memory.
         for _ in 0..3 {
             solver.step().unwrap();

@@ -1,7 +1,55 @@
 //! Shared fixtures for the criterion benchmarks: seeded, reproducible inputs.
 //!
 //! Benchmarks must measure the same work on every run, so every random input
-//! comes from [`SplitMix64`] with a fixed seed instead of an entropy source.
+//! comes from [`SplitMix64`] with a fixed seed instead of an entropy source, and every whole-step
+//! scene from [`square_on_floor`].
+
+use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_contact::Friction;
+use mpm_grid::{Bilinear, RegularGrid};
+use mpm_solver::generate::{Shape, fill};
+use mpm_solver::{Boundaries, NewParticle, Particles, Scheme, Solver, SolverConfig, Vector};
+
+/// A 1 m square body of about `n` particles (2 × 2 per cell, ρ = 1600 kg/m³) resting on a
+/// frictional floor (μ = 0.5), MUSL with bilinear functions; the objective stress rate is on
+/// for plastic models. The whole-step bench and the `profile_step` example run this scene.
+pub fn square_on_floor<M: ConstitutiveModel>(
+    n: usize,
+    model: M,
+) -> Solver<M, Bilinear<RegularGrid>, 4> {
+    let cells_side = (((n / 4) as f64).sqrt().round() as usize).max(1);
+    let cell = 1.0 / cells_side as f64;
+    let grid = RegularGrid::new(
+        Vector::new(-0.5, 0.0),
+        Vector::splat(cell),
+        [2 * cells_side, 2 * cells_side],
+    )
+    .expect("a grid of positive size");
+    let state = model.initial_state();
+    let mut particles = Particles::with_capacity(n);
+    for s in fill(&Shape::Rectangle { min: Vector::ZERO, max: Vector::ONE }, cell / 2.0) {
+        particles.push(NewParticle {
+            position: s.position,
+            velocity: Vector::ZERO,
+            volume: s.area,
+            density: 1600.0,
+            stress: SymTensor::ZERO,
+            state,
+            material: 0,
+            body: 0,
+        });
+    }
+    let config = SolverConfig {
+        scheme: Scheme::Musl,
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: 0.5 }),
+            ..Default::default()
+        },
+        objective_stress: M::IS_PLASTIC,
+        ..Default::default()
+    };
+    Solver::new(Bilinear(grid), vec![model], particles, config).expect("a valid scene")
+}
 
 /// A tiny deterministic generator (SplitMix64) for benchmark inputs.
 ///

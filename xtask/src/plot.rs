@@ -1,23 +1,13 @@
 //! PNG line and scatter charts (plotters with an embedded font; no system font is needed).
 
 use std::path::Path;
-use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
-/// DejaVu Sans, the one copy in the workspace (the CLI's; license next to it): plotters draws
-/// text only with a registered font.
-static FONT: &[u8] = include_bytes!("../../crates/mpm-cli/assets/DejaVuSans.ttf");
-
-static REGISTER: Once = Once::new();
-
+/// plotters draws text only with a registered font: the CLI's embedded DejaVu Sans.
 fn register_font() {
-    REGISTER.call_once(|| {
-        // A failure leaves charts without text; the data series are still drawn.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
+    mpm_cli::output::plots::register_font();
 }
 
 /// How a series is drawn.

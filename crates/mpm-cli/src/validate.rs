@@ -1282,22 +1282,7 @@ fn contains(shape: &Shape, p: Vector) -> bool {
             let (s, h) = (d.dot(t), d.dot(n));
             s > EPS && s < length - EPS && h > EPS && h < thickness - EPS
         }
-        Shape::Polygon { vertices } => {
-            let mut inside = false;
-            let n = vertices.len();
-            let mut j = n - 1;
-            for i in 0..n {
-                let (a, b) = (vertices[i], vertices[j]);
-                if (a.y > p.y) != (b.y > p.y) {
-                    let x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
-                    if p.x < x {
-                        inside = !inside;
-                    }
-                }
-                j = i;
-            }
-            inside
-        }
+        Shape::Polygon { vertices } => mpm_solver::generate::inside_polygon(vertices, p),
     }
 }
 

@@ -107,8 +107,9 @@ fn lattice(
     }
 }
 
-/// even-odd rule point-in-polygon test.
-fn inside_polygon(vertices: &[Vector], p: Vector) -> bool {
+/// even-odd rule point-in-polygon test: true when `p` is strictly inside the polygon with these
+/// vertices (points on an edge may fall either way).
+pub fn inside_polygon(vertices: &[Vector], p: Vector) -> bool {
     let mut inside = false;
     let n = vertices.len();
     let mut j = n - 1;

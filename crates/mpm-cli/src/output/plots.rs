@@ -17,7 +17,9 @@ use crate::output::atomic;
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-fn register_font() {
+/// registers the embedded font as plotters' "sans-serif" (once per process). Call before drawing
+/// text with plotters anywhere (`cargo xtask` does, for its own charts).
+pub fn register_font() {
     REGISTER.call_once(|| {
         // The embedded font is a valid TTF; if registration failed, text would be missing but
         // the plot would still be drawn.
