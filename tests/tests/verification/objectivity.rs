@@ -19,20 +19,7 @@ use mpm_tests::block;
 fn spinning_square_stays_below_the_impedance_stress_scale() {
     let omega = 1.0;
     let (e, rho, half) = (1e10, 1000.0, 0.5);
-    let centre = Vector::splat(1.0);
-    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.125), [16, 16]).unwrap();
-    let mut particles = block(
-        &Shape::Rectangle { min: centre - half, max: centre + half },
-        0.125,
-        2,
-        rho,
-        Vector::ZERO,
-        (),
-    );
-    for i in 0..particles.len() {
-        let r = particles.position[i] - centre;
-        particles.velocity[i] = omega * r.perp();
-    }
+    let (grid, particles) = spinning_square(omega, rho);
     let config =
         SolverConfig { gravity: Vector::ZERO, objective_stress: true, ..Default::default() };
     let material = LinearElastic::from_young_poisson(e, 0.3).unwrap();
@@ -56,21 +43,10 @@ fn spinning_square_stays_below_the_impedance_stress_scale() {
 #[test]
 fn apic_spinning_square_stays_stress_free_and_keeps_its_spin() {
     let omega = 1.0;
-    let (e, rho, half) = (1e10, 1000.0, 0.5);
-    let centre = Vector::splat(1.0);
-    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.125), [16, 16]).unwrap();
-    let mut particles = block(
-        &Shape::Rectangle { min: centre - half, max: centre + half },
-        0.125,
-        2,
-        rho,
-        Vector::ZERO,
-        (),
-    );
+    let (e, rho) = (1e10, 1000.0);
+    let (grid, mut particles) = spinning_square(omega, rho);
+    // The affine matrix of the rigid spin: C r = Ω ẑ × r.
     let spin = mpm_solver::Matrix::from_cols(Vector::new(0.0, omega), Vector::new(-omega, 0.0));
-    for i in 0..particles.len() {
-        particles.velocity[i] = spin * (particles.position[i] - centre);
-    }
     particles.affine = vec![spin; particles.len()];
     let config = SolverConfig {
         gravity: Vector::ZERO,
@@ -98,4 +74,23 @@ fn apic_spinning_square_stays_stress_free_and_keeps_its_spin() {
 fn angular_momentum<S>(p: &mpm_solver::Particles<S>) -> f64 {
     let c = mpm_tests::mass_mean(p, &p.position);
     (0..p.len()).map(|i| p.mass[i] * (p.position[i] - c).perp_dot(p.velocity[i])).sum()
+}
+
+/// A 1 m square of density ρ centred at (1, 1) on a 2 m grid of 0.125 m cells, 2 × 2 particles per
+/// cell, spinning at Ω about its centre (v = Ω ẑ × r).
+fn spinning_square(omega: f64, rho: f64) -> (RegularGrid, mpm_solver::Particles<()>) {
+    let centre = Vector::splat(1.0);
+    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.125), [16, 16]).unwrap();
+    let mut particles = block(
+        &Shape::Rectangle { min: centre - 0.5, max: centre + 0.5 },
+        0.125,
+        2,
+        rho,
+        Vector::ZERO,
+        (),
+    );
+    for i in 0..particles.len() {
+        particles.velocity[i] = omega * (particles.position[i] - centre).perp();
+    }
+    (grid, particles)
 }

@@ -40,26 +40,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         dv += w[p][k] * a[i];
                     }
                     let (x_new, v_new) = (*x + dt * dx, *vp + dt * dv);
-                    if !(x_new.is_finite() && v_new.is_finite()) {
-                        let field =
-                            if x_new.is_finite() { Field::Velocity } else { Field::Position };
-                        return Err(SolverError::NonFinite {
-                            step,
-                            particle: p,
-                            position: *x,
-                            field,
-                        });
-                    }
+                    check_finite(step, p, *x, x_new, v_new)?;
                     *x = x_new;
                     *vp = v_new;
                 }
                 Ok(())
             })
             .find_first(Result::is_err);
-        match failure {
-            Some(Err(e)) => Err(e),
-            _ => Ok(()),
-        }
+        failure.unwrap_or(Ok(()))
     }
 
     /// APIC grid to particle: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p.
@@ -88,16 +76,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         c_new += Matrix::from_cols(v_end * g.x, v_end * g.y);
                     }
                     let x_new = *x + dt * v_new;
-                    if !(x_new.is_finite() && v_new.is_finite()) {
-                        let field =
-                            if x_new.is_finite() { Field::Velocity } else { Field::Position };
-                        return Err(SolverError::NonFinite {
-                            step,
-                            particle: q,
-                            position: *x,
-                            field,
-                        });
-                    }
+                    check_finite(step, q, *x, x_new, v_new)?;
                     *x = x_new;
                     *vp = v_new;
                     *cp = c_new;
@@ -105,9 +84,23 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 Ok(())
             })
             .find_first(Result::is_err);
-        match failure {
-            Some(Err(e)) => Err(e),
-            _ => Ok(()),
-        }
+        failure.unwrap_or(Ok(()))
     }
+}
+
+/// the guard of eqs 6–7: a non-finite new position or velocity stops the run at particle `q`,
+/// reported at its last finite position.
+#[inline(always)]
+fn check_finite(
+    step: u64,
+    q: usize,
+    x: Vector,
+    x_new: Vector,
+    v_new: Vector,
+) -> Result<(), SolverError> {
+    if x_new.is_finite() && v_new.is_finite() {
+        return Ok(());
+    }
+    let field = if x_new.is_finite() { Field::Velocity } else { Field::Position };
+    Err(SolverError::NonFinite { step, particle: q, position: x, field })
 }
