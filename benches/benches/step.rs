@@ -11,22 +11,11 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use mpm_constitutive::{
-    ConeMatch, ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic,
-};
+use mpm_constitutive::{ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic};
 
+/// the paper's dry sand (§7, Table 2).
 fn sand() -> DruckerPrager {
-    DruckerPrager::new(DruckerPragerParams {
-        young: 2e6,
-        poisson: 0.3,
-        cohesion: 10.0,
-        friction_angle_deg: 40.0,
-        dilatancy_angle_deg: 0.0,
-        hardening_modulus: 0.0,
-        mixing: 0.8,
-        cone_match: ConeMatch::PlaneStrain,
-    })
-    .unwrap()
+    DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND).expect("valid parameters")
 }
 
 fn bench_model<M: ConstitutiveModel + Clone>(c: &mut Criterion, name: &str, model: M) {
