@@ -15,7 +15,7 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-pub use mpm_solver::{Scheme, Transfer};
+pub use mpm_solver::{Contact, Scheme, Transfer};
 
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -378,6 +378,10 @@ pub struct SolverSpec {
     /// velocity transfer: `"flip"` (default, the paper's) or `"apic"` (affine; keeps rotation).
     #[serde(default)]
     pub transfer: Option<Transfer>,
+    /// when boundary planes hold their nodes: `"surface"` (default: where material touches them)
+    /// or `"node"` (the paper's: always).
+    #[serde(default)]
+    pub contact: Option<Contact>,
 }
 
 /// A point-data field of the VTK output.

@@ -863,6 +863,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             .unwrap_or(material_kind == MaterialKind::DruckerPrager),
         gravity_ramp,
         transfer: s.transfer.unwrap_or_default(),
+        contact: s.contact.unwrap_or_default(),
     };
     config.validate().map_err(|e| solver_error(ctx, e))?;
 

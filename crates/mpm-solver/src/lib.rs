@@ -53,7 +53,7 @@ pub mod particles;
 pub mod solver;
 mod stages;
 
-pub use config::{Boundaries, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer};
+pub use config::{Boundaries, Contact, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer};
 pub use energy::{Dissipation, EnergyLedger};
 pub use error::{Field, SolverError};
 pub use math::{Matrix, Real, Vector};

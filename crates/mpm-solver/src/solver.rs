@@ -91,6 +91,11 @@ pub(crate) struct BoundaryNode {
     pub(crate) node: u32,
     pub(crate) count: u8,
     pub(crate) planes: [Boundary; 3],
+    /// A point of each plane: the node itself, or for a ghost node the midpoint between it and
+    /// its image.
+    pub(crate) points: [Vector; 3],
+    /// Bit k is set while plane k holds the node (see [`crate::Contact`]); set every step.
+    pub(crate) touching: u8,
     /// For a ghost node of a wide stencil: its image across the plane.
     pub(crate) mirror: Option<Mirror>,
 }
@@ -153,6 +158,11 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
     pub(crate) saved: Vec<Vector>,
+    /// (node, plane normal) of every plane that pushed on a node in this step's grid solve
+    /// (surface contact only): their particles take the normal velocity as in PIC.
+    pub(crate) held: Vec<(u32, Vector)>,
+    /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
+    pub(crate) corrections: Vec<(u32, Vector)>,
 }
 
 impl<const N: usize> Scratch<N> {
@@ -173,6 +183,8 @@ impl<const N: usize> Scratch<N> {
             node_position: Vec::new(),
             located: false,
             saved: Vec::new(),
+            held: Vec::new(),
+            corrections: Vec::new(),
         }
     }
 
@@ -189,6 +201,7 @@ impl<const N: usize> Scratch<N> {
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
+            + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
             + self.node_position.capacity() * size_of::<Vector>()
     }
 }
@@ -429,6 +442,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         };
         let ramp_work = if ramping { ramp_work_at(&self.particles) } else { 0.0 };
         self.locate()?;
+        self.detect_contact(dt);
         let (cone, apex) = match self.config.scheme {
             Scheme::Usl => {
                 self.p2g_all(dt);

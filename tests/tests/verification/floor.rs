@@ -101,7 +101,7 @@ fn column_collapse<S: ShapeFunctions<N>, const N: usize>(shape: S) -> f64 {
 }
 
 fn sand_grid() -> RegularGrid {
-    RegularGrid::new(Vector::ZERO, Vector::splat(0.0625), [40, 20]).unwrap()
+    RegularGrid::new(Vector::ZERO, Vector::splat(0.0625), [64, 20]).unwrap()
 }
 
 #[test]

@@ -2,6 +2,14 @@
 //!
 //! x_p ← x_p + Δt Σ_i v_i^L S_ip (eq 6), v_p ← v_p + Δt Σ_i a_i S_ip (eq 7, the FLIP update).
 //! A non-finite result stops the run with the particle that produced it.
+//!
+//! Under surface contact ([`crate::Contact::Surface`]) a node that a plane pushed on in this step
+//! passes its normal velocity to its particles as in PIC: particle p's share of node i becomes
+//! S_ip (v_i^L − v_p)·n instead of the FLIP increment S_ip (v_i^L − v_i)·n, i.e. a correction
+//! S_ip ((v_i − v_p)·n) n. Momentum is unchanged (Σ_p m_p S_ip v_p = m_i v_i) and the correction
+//! can only take kinetic energy away, whereas the FLIP increment leaves in each particle the part
+//! of its approach velocity that the node's average did not see, to be stopped again, and turned
+//! into strain energy, at the next step.
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
@@ -15,6 +23,9 @@ use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     pub(crate) fn g2p(&mut self, dt: Real) -> Result<(), SolverError> {
+        if self.config.transfer == Transfer::Flip && !self.scratch.held.is_empty() {
+            self.correct_held_normals();
+        }
         let sc = &self.scratch;
         let (idx, w) = (&sc.node_index, &sc.weights);
         let (a, v) = (&sc.acceleration, &sc.velocity);
@@ -48,6 +59,28 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             })
             .find_first(Result::is_err);
         failure.unwrap_or(Ok(()))
+    }
+
+    /// the PIC normal correction at nodes held by a plane (module docs), gathered from the
+    /// start-of-step particle velocities before any is changed, then applied. Like the difference
+    /// between FLIP and PIC anywhere, the kinetic energy it takes is a transfer dissipation with no
+    /// grid counterpart: the ledger shows it in the residual, not as constraint work. Serial: it
+    /// visits only the particles of held boundary nodes.
+    pub(crate) fn correct_held_normals(&mut self) {
+        let sc = &mut self.scratch;
+        let p = &mut self.particles;
+        sc.corrections.clear();
+        for &(i, n) in &sc.held {
+            let i = i as usize;
+            for &e in &sc.entry[sc.start[i] as usize..sc.start[i + 1] as usize] {
+                let (q, k) = (e as usize / N, e as usize % N);
+                let dv = sc.weights[q][k] * (sc.velocity[i] - p.velocity[q]).dot(n) * n;
+                sc.corrections.push((q as u32, dv));
+            }
+        }
+        for &(q, dv) in &sc.corrections {
+            p.velocity[q as usize] += dv;
+        }
     }
 
     /// APIC grid to particle: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p.

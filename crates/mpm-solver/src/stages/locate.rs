@@ -150,17 +150,28 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     }
                 }
                 if let Some(first) = planes[0] {
+                    let here = shape.node_position(node);
+                    let mut points = [here; 3];
                     let mirror = shape.mirror(node).and_then(|(image, normal)| {
                         let fixed = planes
                             .iter()
                             .flatten()
                             .any(|p| p.normal() == normal && p.friction() == Friction::Fixed);
+                        // The mirror plane lies halfway between the ghost and its image.
+                        let middle = 0.5 * (here + shape.node_position(image));
+                        for (point, plane) in points.iter_mut().zip(&planes) {
+                            if plane.is_some_and(|p| p.normal() == normal) {
+                                *point = middle;
+                            }
+                        }
                         active.index_of(image).map(|j| Mirror { image: j as u32, normal, fixed })
                     });
                     sc.boundary.push(BoundaryNode {
                         node: i as u32,
                         count: count as u8,
                         planes: planes.map(|b| b.unwrap_or(first)),
+                        points,
+                        touching: 0,
                         mirror,
                     });
                 }
