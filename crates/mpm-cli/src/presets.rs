@@ -24,16 +24,16 @@ pub struct PresetSettings {
 }
 
 /// The table: (preset, settings), measured by `cargo xtask study` (README, "Speed and accuracy"):
-/// fast: sliding block 0.240 %, bar 0.768 %, flume 2.963 % (worse of error and energy residual), 1.34 s.
-/// balanced: sliding block 0.066 %, bar 0.488 %, flume 2.950 % (worse of error and energy residual), 2.78 s.
-/// accurate: sliding block 0.109 %, bar 0.369 %, flume 0.247 % (worse of error and energy residual), 5.06 s.
+/// fast: sliding block 0.154 %, bar 0.916 %, flume 13.890 % (worse of error and energy residual), 1.05 s.
+/// balanced: sliding block 0.047 %, bar 0.768 %, flume 13.537 % (worse of error and energy residual), 1.39 s.
+/// accurate: sliding block 0.017 %, bar 1.672 %, flume 1.437 % (worse of error and energy residual), 5.85 s.
 pub const PRESETS: [(Preset, PresetSettings); 3] = [
     (
         Preset::Fast,
         PresetSettings {
-            scheme: Scheme::Musl,
-            shape_function: ShapeFunctionKind::Gimp,
-            courant: 0.2,
+            scheme: Scheme::Usavg,
+            shape_function: ShapeFunctionKind::Bspline,
+            courant: 0.4,
         },
     ),
     (
@@ -41,14 +41,14 @@ pub const PRESETS: [(Preset, PresetSettings); 3] = [
         PresetSettings {
             scheme: Scheme::Musl,
             shape_function: ShapeFunctionKind::Gimp,
-            courant: 0.1,
+            courant: 0.2,
         },
     ),
     (
         Preset::Accurate,
         PresetSettings {
             scheme: Scheme::Musl,
-            shape_function: ShapeFunctionKind::Gimp,
+            shape_function: ShapeFunctionKind::Bspline,
             courant: 0.05,
         },
     ),
