@@ -229,6 +229,9 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) scratch: Scratch<N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
+    /// The next step's fastest signal (max_p (c_p + |v_p|), particle) when the last step's final
+    /// particle loop computed it; `None` makes the time step compute it.
+    pub(crate) next_signal: Option<(Real, usize)>,
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -310,6 +313,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 cone_returns: 0,
                 apex_returns: 0,
             },
+            next_signal: None,
         };
         // Every particle must be inside the grid before the first step; a failure here is
         // reported at the step already completed (0 for a new run).
@@ -344,6 +348,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// mutable access to the particles (for tests and scripted loading; the next step re-locates them).
     pub fn particles_mut(&mut self) -> &mut Particles<M::State> {
+        self.next_signal = None;
         &mut self.particles
     }
 
@@ -449,19 +454,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.advance_velocity(dt);
-                self.update_stress(dt)?
+                self.update_stress(dt, true)?
             }
             Scheme::Musl => {
                 self.p2g_all(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
-                self.update_stress(dt)?
+                self.update_stress(dt, true)?
             }
             Scheme::Usf => {
                 self.p2g_mass_velocity();
                 self.constrain_velocity();
-                let counts = self.update_stress(dt)?;
+                let counts = self.update_stress(dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
                 self.grid_solve(dt);
@@ -471,13 +476,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Scheme::Usavg => {
                 self.p2g_mass_velocity();
                 self.constrain_velocity();
-                self.update_stress(0.5 * dt)?;
+                self.update_stress(0.5 * dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
-                self.update_stress(0.5 * dt)?
+                self.update_stress(0.5 * dt, true)?
             }
         };
         if ramping {

@@ -17,20 +17,34 @@ use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::CHUNK;
 use crate::solver::Solver;
+use crate::stages::timestep::{SLOWEST, faster, particle_signal};
 
 /// What one chunk of particles reports back.
-#[derive(Default)]
 struct ChunkTally {
     dissipation: Real,
     cone: usize,
     apex: usize,
+    /// the chunk's fastest signal, when the step asked for it
+    signal: (Real, usize),
+}
+
+impl Default for ChunkTally {
+    fn default() -> Self {
+        Self { dissipation: 0.0, cone: 0, apex: 0, signal: SLOWEST }
+    }
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// updates every particle's stress, state and volume over `dt` from the nodal velocities in
     /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns the numbers of
-    /// cone and apex returns.
-    pub(crate) fn update_stress(&mut self, dt: Real) -> Result<(usize, usize), SolverError> {
+    /// cone and apex returns. With `last`, this is the step's last particle loop, particle
+    /// velocities are final, and it also finds the next step's fastest signal (`timestep.rs`).
+    pub(crate) fn update_stress(
+        &mut self,
+        dt: Real,
+        last: bool,
+    ) -> Result<(usize, usize), SolverError> {
+        let moduli = &self.p_modulus;
         let sc = &self.scratch;
         let nodal = &sc.velocity;
         let (idx, grad) = (&sc.node_index, &sc.gradients);
@@ -39,6 +53,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let step = self.step + 1;
         let p = &mut self.particles;
         let (position, material) = (&p.position, &p.material);
+        let (mass, velocity) = (&p.mass, &p.velocity);
 
         let results: Vec<Result<ChunkTally, SolverError>> =
             p.stress
@@ -99,17 +114,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         // stress that an absurd increment overflowed is refused as input at the
                         // next step, naming the particle.
                         volume[j] *= ratio;
+                        if last {
+                            let m = moduli[usize::from(material[q])];
+                            let signal = particle_signal(m, volume[j], mass[q], velocity[q]);
+                            tally.signal = faster(tally.signal, (signal, q));
+                        }
                     }
                     Ok(tally)
                 })
                 .collect();
 
-        let (mut cone, mut apex) = (0, 0);
+        let (mut cone, mut apex, mut signal) = (0, 0, SLOWEST);
         for r in results {
             let t = r?;
             self.dissipation.plastic += t.dissipation;
             cone += t.cone;
             apex += t.apex;
+            signal = faster(signal, t.signal);
+        }
+        if last {
+            self.next_signal = Some(signal);
         }
         Ok((cone, apex))
     }
@@ -156,7 +180,7 @@ mod tests {
         let steps = 1000;
         let dt = std::f64::consts::FRAC_PI_2 / omega / steps as f64;
         for _ in 0..steps {
-            s.update_stress(dt).unwrap();
+            s.update_stress(dt, false).unwrap();
         }
         (sigma0, s.particles.stress[0])
     }

@@ -3,6 +3,12 @@
 //! c_p = √((λ + 2G)/ρ_p) is the dilatational wave speed at particle p, L the smallest cell size.
 //! The fastest signal is s = max_p (c_p + |v_p|); Δt = C·L/s for a Courant number C, or a fixed Δt
 //! whose Courant number Δt·s/L must stay ≤ 1.
+//!
+//! The signal needs every particle's final velocity and volume. Where a scheme's last particle loop
+//! sees both (the stress update that ends USL, MUSL and USAVG), that loop computes it for the next
+//! step with [`particle_signal`] and [`faster`], which saves a pass over the particles; otherwise
+//! (USF, the first step, after `particles_mut`) [`Solver::fastest_signal`] does. Both give the
+//! same bits.
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
@@ -10,14 +16,18 @@ use rayon::prelude::*;
 
 use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
-use crate::math::Real;
+use crate::math::{Real, Vector};
 use crate::par::CHUNK;
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// (Δt, Courant number) of the next step, with Δt ≤ `max_dt`.
-    pub(crate) fn time_step(&self, max_dt: Real) -> Result<(Real, Real), SolverError> {
-        let (signal, particle, speed) = self.fastest_signal();
+    pub(crate) fn time_step(&mut self, max_dt: Real) -> Result<(Real, Real), SolverError> {
+        let (signal, particle) = match self.next_signal.take() {
+            Some(known) => known,
+            None => self.fastest_signal(),
+        };
+        let speed = self.particles.velocity[particle.min(self.particles.len() - 1)].length();
         if !signal.is_finite() {
             // A NaN or infinite velocity or volume: name it before it spreads through the grid.
             let p = &self.particles;
@@ -53,28 +63,42 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
     }
 
-    /// (max_p (c_p + |v_p|), that particle, its speed). Ties go to the lowest index, so the
-    /// answer does not depend on the thread count; a non-finite signal counts as infinite so that
-    /// the first such particle is the one reported.
-    fn fastest_signal(&self) -> (Real, usize, Real) {
+    /// (max_p (c_p + |v_p|), that particle). Ties go to the lowest index, so the answer does not
+    /// depend on the thread count; a non-finite signal counts as infinite so that the first such
+    /// particle is the one reported.
+    fn fastest_signal(&self) -> (Real, usize) {
         let p = &self.particles;
         let n = p.len();
-        let better = |a: (Real, usize), b: (Real, usize)| {
-            if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a }
-        };
-        let (signal, particle) = (0..n.div_ceil(CHUNK))
+        (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut best = (0.0, usize::MAX);
+                let mut best = SLOWEST;
                 for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                     let m = self.p_modulus[usize::from(p.material[i])];
-                    let c = (m * p.volume[i] / p.mass[i]).sqrt();
-                    let s = c + p.velocity[i].length();
-                    best = better(best, (if s.is_finite() { s } else { Real::INFINITY }, i));
+                    best = faster(
+                        best,
+                        (particle_signal(m, p.volume[i], p.mass[i], p.velocity[i]), i),
+                    );
                 }
                 best
             })
-            .reduce(|| (0.0, usize::MAX), better);
-        (signal, particle, p.velocity[particle].length())
+            .reduce(|| SLOWEST, faster)
     }
+}
+
+/// The identity of [`faster`]: no signal, no particle.
+pub(crate) const SLOWEST: (Real, usize) = (0.0, usize::MAX);
+
+/// c_p + |v_p| with c_p = √(M V_p / m_p) for P-wave modulus M; a non-finite value counts as
+/// infinite.
+#[inline(always)]
+pub(crate) fn particle_signal(modulus: Real, volume: Real, mass: Real, velocity: Vector) -> Real {
+    let s = (modulus * volume / mass).sqrt() + velocity.length();
+    if s.is_finite() { s } else { Real::INFINITY }
+}
+
+/// the faster of two (signal, particle) pairs; ties go to the lower index.
+#[inline(always)]
+pub(crate) fn faster(a: (Real, usize), b: (Real, usize)) -> (Real, usize) {
+    if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a }
 }
