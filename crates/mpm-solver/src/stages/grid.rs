@@ -208,25 +208,26 @@ mod tests {
     use crate::particles::{NewParticle, Particles};
     use crate::{Boundaries, Contact, Solver, SolverConfig, Vector};
 
-    /// One 0.125 m particle (half-size r = 0.0625 m) at height `y` and vertical velocity `vy`
-    /// over a frictionless floor of 0.25 m cells.
-    fn one_particle(
-        y: f64,
-        vy: f64,
+    /// 0.125 m particles (half-size r = 0.0625 m) given as (position, velocity, density) over a
+    /// frictionless floor of 0.25 m cells.
+    fn on_floor(
+        seeds: &[(Vector, Vector, f64)],
         contact: Contact,
     ) -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [4, 4]).unwrap();
         let mut particles = Particles::default();
-        particles.push(NewParticle {
-            position: Vector::new(0.5, y),
-            velocity: Vector::new(0.0, vy),
-            volume: 0.125 * 0.125,
-            density: 1000.0,
-            stress: SymTensor::ZERO,
-            state: (),
-            material: 0,
-            body: 0,
-        });
+        for &(position, velocity, density) in seeds {
+            particles.push(NewParticle {
+                position,
+                velocity,
+                volume: 0.125 * 0.125,
+                density,
+                stress: SymTensor::ZERO,
+                state: (),
+                material: 0,
+                body: 0,
+            });
+        }
         let config = SolverConfig {
             boundaries: Boundaries {
                 ground: Some(Friction::Coulomb { mu: 0.0 }),
@@ -241,7 +242,7 @@ mod tests {
 
     /// how many of the floor nodes the particle reaches are held.
     fn held(y: f64, vy: f64, dt: f64, contact: Contact) -> usize {
-        let mut s = one_particle(y, vy, contact);
+        let mut s = on_floor(&[(Vector::new(0.5, y), Vector::new(0.0, vy), 1000.0)], contact);
         s.detect_contact(dt);
         assert_eq!(s.scratch.boundary.len(), 2, "the particle's two floor nodes");
         s.scratch.boundary.iter().filter(|b| b.touching != 0).count()
@@ -268,9 +269,6 @@ mod tests {
     /// `g2p`): checked on particles of random velocities over two held floor nodes.
     #[test]
     fn pic_normal_correction_conserves_momentum_and_takes_energy() {
-        let mut s = one_particle(0.0625, 0.0, Contact::Surface);
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [4, 4]).unwrap();
-        let mut particles = s.particles.clone();
         let mut seed = 0x2545_f491_4f6c_dd1d_u64;
         let mut uniform = || {
             seed ^= seed << 13;
@@ -278,19 +276,13 @@ mod tests {
             seed ^= seed << 17;
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
+        let mut seeds = vec![(Vector::new(0.5, 0.0625), Vector::ZERO, 1000.0)];
         for _ in 0..7 {
-            particles.push(NewParticle {
-                position: Vector::new(0.3 + 0.4 * uniform(), 0.05 + 0.15 * uniform()),
-                velocity: Vector::new(2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0),
-                volume: 0.125 * 0.125,
-                density: 1000.0 + 500.0 * uniform(),
-                stress: SymTensor::ZERO,
-                state: (),
-                material: 0,
-                body: 0,
-            });
+            let position = Vector::new(0.3 + 0.4 * uniform(), 0.05 + 0.15 * uniform());
+            let velocity = Vector::new(2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0);
+            seeds.push((position, velocity, 1000.0 + 500.0 * uniform()));
         }
-        s = Solver::new(Bilinear(grid), s.materials.clone(), particles, *s.config()).unwrap();
+        let mut s = on_floor(&seeds, Contact::Surface);
         s.p2g_mass_velocity();
         let floor: Vec<u32> = s.scratch.boundary.iter().map(|b| b.node).collect();
         assert!(!floor.is_empty());
