@@ -114,9 +114,32 @@ impl SymTensor {
     }
 
     /// `R A Rᵀ`: the tensor seen in a frame rotated by the orthogonal matrix `r`.
+    ///
+    /// A rotation about z (the only one plane strain produces) takes the closed form of
+    /// [`Self::rotated_z`], a quarter of the work of the general triple product.
+    #[inline]
     pub fn rotated(&self, r: &DMat3) -> Self {
+        let (x, y) = (r.x_axis, r.y_axis);
+        if x.z == 0.0 && y.z == 0.0 && r.z_axis == glam::DVec3::Z && x.x == y.y && x.y == -y.x {
+            return self.rotated_z(x.x, x.y);
+        }
         let m = self.to_mat3();
         Self::from_mat3_sym(&(*r * m * r.transpose()))
+    }
+
+    /// `R A Rᵀ` for the rotation about z with `R = [[c, −s, 0], [s, c, 0], [0, 0, 1]]`, c = cos θ,
+    /// s = sin θ: the in-plane block turns by θ, (A_zx, A_yz) turns as a vector and A_zz stays.
+    #[inline]
+    pub fn rotated_z(&self, c: f64, s: f64) -> Self {
+        let (cc, ss, cs) = (c * c, s * s, c * s);
+        Self {
+            xx: cc * self.xx - 2.0 * cs * self.xy + ss * self.yy,
+            yy: ss * self.xx + 2.0 * cs * self.xy + cc * self.yy,
+            zz: self.zz,
+            xy: cs * (self.xx - self.yy) + (cc - ss) * self.xy,
+            yz: s * self.zx + c * self.yz,
+            zx: c * self.zx - s * self.yz,
+        }
     }
 
     /// true when all six components are finite.
@@ -303,6 +326,26 @@ mod tests {
 
     fn sample() -> SymTensor {
         SymTensor::new(3.0, -1.0, 2.0, 0.5, -1.5, 1.0)
+    }
+
+    /// The closed-form z rotation (taken by `rotated` whenever `r` is one) equals the general
+    /// triple product R A Rᵀ to rounding, and keeps the invariants.
+    #[test]
+    fn z_rotation_closed_form_equals_the_triple_product() {
+        let a = sample();
+        for k in 0..64 {
+            let theta = -3.2 + 0.1 * k as f64;
+            let r = DMat3::from_rotation_z(theta);
+            let fast = a.rotated(&r);
+            let general = SymTensor::from_mat3_sym(&(r * a.to_mat3() * r.transpose()));
+            assert!((fast - general).norm() <= 10.0 * ROUNDING * a.norm(), "θ = {theta}");
+            assert!((fast.j2() - a.j2()).abs() <= 10.0 * ROUNDING * a.j2());
+            assert_eq!(fast.zz, a.zz);
+        }
+        // Not a z rotation: the general path, still R A Rᵀ.
+        let r = DMat3::from_rotation_x(0.3);
+        let general = SymTensor::from_mat3_sym(&(r * a.to_mat3() * r.transpose()));
+        assert_eq!(a.rotated(&r), general);
     }
 
     #[test]

@@ -49,6 +49,7 @@ pub mod error;
 pub mod generate;
 pub mod math;
 mod par;
+pub use par::{PARTICLES_PER_THREAD, useful_threads};
 pub mod particles;
 pub mod solver;
 mod stages;

@@ -2,22 +2,46 @@
 //!
 //! Rayon decides at run time which thread takes which item; a floating-point sum whose order depends
 //! on that would differ between runs with 1 and 2 threads. Every reduction here therefore splits the
-//! index range into chunks of a fixed size [`CHUNK`] (independent of the thread count), sums each chunk
-//! in index order, and adds the chunk sums in chunk order. The result is bit-identical for any number
-//! of threads.
+//! index range into chunks whose length [`chunk_len`] depends only on the number of items (never on
+//! the thread count), sums each chunk in index order, and adds the chunk sums in chunk order. The
+//! result is bit-identical for any number of threads.
 
 use rayon::prelude::*;
 
-/// Items per chunk of a deterministic reduction (large enough to amortise rayon's task cost).
+/// Items per chunk of a large loop (enough to amortise rayon's task cost).
 pub const CHUNK: usize = 2048;
+
+/// Fewest items per chunk: below this a task costs more than the work it carries.
+const MIN_CHUNK: usize = 64;
+
+/// the chunk length for a loop over `n` items: [`CHUNK`] for large loops, and for small ones
+/// about an eighth of the loop (at least [`MIN_CHUNK`]), so that a scene of a few hundred
+/// particles still has work for every core. A function of `n` alone: the same chunks, hence the
+/// same sums, for any thread count.
+pub fn chunk_len(n: usize) -> usize {
+    (n / 8).clamp(MIN_CHUNK, CHUNK)
+}
+
+/// Particles each thread needs before another thread pays for its hand-offs: below this a step's
+/// loops are so short that waking a second worker for each of them costs what it saves
+/// (measured on the flume and a collapsing column, 2 cores; see the README's performance notes).
+pub const PARTICLES_PER_THREAD: usize = 2000;
+
+/// how many of `available` threads a scene of `particles` particles should use: at least one,
+/// and one more per [`PARTICLES_PER_THREAD`] particles. Results do not depend on it (every loop
+/// is chunked by size alone), only the wall time does.
+pub fn useful_threads(particles: usize, available: usize) -> usize {
+    (particles / PARTICLES_PER_THREAD).clamp(1, available.max(1))
+}
 
 /// Σ_{i<n} f(i), bit-identical for every thread count.
 pub fn sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
-    let chunks: Vec<f64> = (0..n.div_ceil(CHUNK))
+    let chunk = chunk_len(n);
+    let chunks: Vec<f64> = (0..n.div_ceil(chunk))
         .into_par_iter()
         .map(|c| {
             let mut s = 0.0;
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+            for i in c * chunk..((c + 1) * chunk).min(n) {
                 s += f(i);
             }
             s
@@ -31,8 +55,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn small_scenes_use_fewer_threads() {
+        assert_eq!(useful_threads(336, 2), 1);
+        assert_eq!(useful_threads(0, 8), 1);
+        assert_eq!(useful_threads(2 * PARTICLES_PER_THREAD, 2), 2);
+        assert_eq!(useful_threads(1_000_000, 2), 2);
+        assert_eq!(useful_threads(1_000_000, 0), 1);
+    }
+
+    #[test]
     fn sum_is_identical_for_one_and_two_threads() {
-        let n = 10 * CHUNK + 17;
+        for n in [10 * CHUNK + 17, 300] {
+            sum_is_identical_for(n);
+        }
+    }
+
+    fn sum_is_identical_for(n: usize) {
         let f = |i: usize| ((i as f64) * 0.37).sin() * 1e3 + 1e-7 * i as f64;
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();

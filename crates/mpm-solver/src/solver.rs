@@ -83,6 +83,9 @@ pub struct Checkpoint<St> {
     pub dissipation: Dissipation,
     /// Stored energy at the start of the run (the ledger's reference).
     pub initial_stored: Real,
+    /// Lightest initial density of each material (kg/m³): the time step's reference (see
+    /// `stages/timestep.rs`); empty in a new run, where the particles' densities set it.
+    pub reference_density: Vec<Real>,
 }
 
 /// A boundary node: its dense index and the (up to three) planes it lies on.
@@ -154,6 +157,10 @@ pub(crate) struct Scratch<const N: usize> {
     /// The arrays below `node_ids` describe the current `node_ids` (false before the first
     /// locate and after a failed one).
     pub(crate) located: bool,
+    /// `Some(changed)` when the last step's final particle loop already put every particle's
+    /// stencil at its current position into `node_ids`, `weights` and `gradients` (`changed`: some
+    /// node id differs from the numbered set); `None` makes `locate` compute them.
+    pub(crate) stencils_ahead: Option<bool>,
     /// x_i of the active nodes (APIC only; empty under FLIP).
     pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -182,6 +189,7 @@ impl<const N: usize> Scratch<N> {
             boundary: Vec::new(),
             node_position: Vec::new(),
             located: false,
+            stencils_ahead: None,
             saved: Vec::new(),
             held: Vec::new(),
             corrections: Vec::new(),
@@ -226,6 +234,11 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) cell_size: Real,
     /// λ + 2G of each material (Pa), for the dilatational wave speed.
     pub(crate) p_modulus: Vec<Real>,
+    /// Lightest initial density of each material (kg/m³): the time step counts a particle's
+    /// density only where it exceeds this (`stages/timestep.rs`).
+    pub(crate) reference_density: Vec<Real>,
+    /// (λ + 2G)/ρ_ref of each material (m²/s²): the largest c_p² the time step uses.
+    pub(crate) signal_cap: Vec<Real>,
     pub(crate) scratch: Scratch<N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
@@ -254,6 +267,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 step: 0,
                 dissipation: Dissipation::default(),
                 initial_stored: f64::NAN,
+                reference_density: Vec::new(),
             },
         )
     }
@@ -290,7 +304,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         validate_particles(&particles, materials.len())?;
         let mean_mass = particles.total_mass() / particles.len() as Real;
         let cell_size = shape.min_cell_size();
-        let p_modulus = materials.iter().map(|m| m.elasticity().p_wave_modulus()).collect();
+        let p_modulus: Vec<Real> =
+            materials.iter().map(|m| m.elasticity().p_wave_modulus()).collect();
+        let reference_density =
+            reference_density(&particles, materials.len(), checkpoint.reference_density)?;
+        let signal_cap = p_modulus.iter().zip(&reference_density).map(|(m, r)| m / r).collect();
         let mut solver = Self {
             shape,
             materials,
@@ -303,6 +321,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             small_mass: config.small_mass_ratio * mean_mass,
             cell_size,
             p_modulus,
+            reference_density,
+            signal_cap,
             scratch: Scratch::new(),
             last: StepReport {
                 step: checkpoint.step,
@@ -338,6 +358,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             step: self.step,
             dissipation: self.dissipation,
             initial_stored: self.initial_stored,
+            reference_density: self.reference_density.clone(),
         }
     }
 
@@ -349,6 +370,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// mutable access to the particles (for tests and scripted loading; the next step re-locates them).
     pub fn particles_mut(&mut self) -> &mut Particles<M::State> {
         self.next_signal = None;
+        self.scratch.stencils_ahead = None;
         &mut self.particles
     }
 
@@ -518,6 +540,32 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         Ok(RunEnd::EndTime)
     }
+}
+
+/// the time step's reference density of each material: the checkpoint's (a resumed run keeps the
+/// density it started with), or in a new run the lightest density of each material's particles
+/// (a material no particle uses gets +∞: its cap is never consulted).
+fn reference_density<St>(
+    p: &Particles<St>,
+    materials: usize,
+    saved: Vec<Real>,
+) -> Result<Vec<Real>, SolverError> {
+    if saved.is_empty() {
+        let mut lightest = vec![Real::INFINITY; materials];
+        for i in 0..p.len() {
+            let m = usize::from(p.material[i]);
+            lightest[m] = lightest[m].min(p.density(i));
+        }
+        return Ok(lightest);
+    }
+    if saved.len() != materials || saved.iter().any(|r| r.is_nan() || *r <= 0.0) {
+        return Err(SolverError::InvalidSetting {
+            name: "checkpoint.reference_density",
+            value: saved.len() as f64,
+            expected: "one positive density per material",
+        });
+    }
+    Ok(saved)
 }
 
 fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), SolverError> {

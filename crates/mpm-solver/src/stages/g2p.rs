@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use crate::config::Transfer;
 use crate::error::{Field, SolverError};
 use crate::math::{Matrix, Real, Vector};
-use crate::par::CHUNK;
+use crate::par::chunk_len;
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -33,15 +33,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             return self.g2p_apic(dt);
         }
         let step = self.step + 1;
+        let chunk = chunk_len(self.particles.len());
         let failure = self
             .particles
             .position
-            .par_chunks_mut(CHUNK)
-            .zip(self.particles.velocity.par_chunks_mut(CHUNK))
+            .par_chunks_mut(chunk)
+            .zip(self.particles.velocity.par_chunks_mut(chunk))
             .enumerate()
             .map(|(c, (xs, vs))| {
                 for (j, (x, vp)) in xs.iter_mut().zip(vs.iter_mut()).enumerate() {
-                    let p = c * CHUNK + j;
+                    let p = c * chunk + j;
                     let mut dx = Vector::ZERO;
                     let mut dv = Vector::ZERO;
                     for k in 0..N {
@@ -90,15 +91,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (a, v) = (&sc.acceleration, &sc.velocity);
         let step = self.step + 1;
         let p = &mut self.particles;
+        let chunk = chunk_len(p.len());
         let failure = p
             .position
-            .par_chunks_mut(CHUNK)
-            .zip(p.velocity.par_chunks_mut(CHUNK))
-            .zip(p.affine.par_chunks_mut(CHUNK))
+            .par_chunks_mut(chunk)
+            .zip(p.velocity.par_chunks_mut(chunk))
+            .zip(p.affine.par_chunks_mut(chunk))
             .enumerate()
             .map(|(c, ((xs, vs), cs))| {
                 for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
-                    let q = c * CHUNK + j;
+                    let q = c * chunk + j;
                     let mut v_new = Vector::ZERO;
                     let mut c_new = Matrix::ZERO;
                     for k in 0..N {

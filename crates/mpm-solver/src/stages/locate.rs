@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::config::Transfer;
 use crate::error::SolverError;
 use crate::math::Vector;
-use crate::par::CHUNK;
+use crate::par::chunk_len;
 use crate::solver::{BoundaryNode, Mirror, Solver};
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -25,6 +25,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // the active set, its numbering (a function of the set), the node lists and the boundary
         // nodes are all unchanged, and only the weights and gradients need computing.
         let reusable = sc.located && sc.node_ids.len() == n;
+        let chunk = chunk_len(n);
         sc.node_ids.resize(n, [Default::default(); N]);
         sc.node_index.resize(n, [0; N]);
         sc.weights.resize(n, [0.0; N]);
@@ -32,47 +33,54 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
         let shape = &self.shape;
         let positions = &self.particles.position;
-        // Fixed chunks, each run in particle order: the first chunk that fails reports its first
-        // failing particle, so the error names the same particle for any thread count.
-        let failure = sc
-            .node_ids
-            .par_chunks_mut(CHUNK)
-            .zip(sc.weights.par_chunks_mut(CHUNK))
-            .zip(sc.gradients.par_chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(c, ((ids, w), g))| {
-                let mut changed = false;
-                for j in 0..ids.len() {
-                    let p = c * CHUNK + j;
-                    match shape.stencil(positions[p]) {
-                        Ok(s) => {
-                            changed |= ids[j] != s.nodes;
-                            ids[j] = s.nodes;
-                            w[j] = s.weights;
-                            g[j] = s.gradients;
+        let changed = match sc.stencils_ahead.take() {
+            // The last step's final particle loop computed them (`stress.rs`).
+            Some(changed) => changed,
+            None => {
+                // Fixed chunks, each run in particle order: the first chunk that fails reports
+                // its first failing particle, so the error names the same particle for any
+                // thread count.
+                let failure = sc
+                    .node_ids
+                    .par_chunks_mut(chunk)
+                    .zip(sc.weights.par_chunks_mut(chunk))
+                    .zip(sc.gradients.par_chunks_mut(chunk))
+                    .enumerate()
+                    .map(|(c, ((ids, w), g))| {
+                        let mut changed = false;
+                        for j in 0..ids.len() {
+                            let p = c * chunk + j;
+                            match shape.stencil(positions[p]) {
+                                Ok(s) => {
+                                    changed |= ids[j] != s.nodes;
+                                    ids[j] = s.nodes;
+                                    w[j] = s.weights;
+                                    g[j] = s.gradients;
+                                }
+                                Err(cause) => return Err((p, cause)),
+                            }
                         }
-                        Err(cause) => return Err((p, cause)),
+                        Ok(changed)
+                    })
+                    .try_reduce(|| false, |a, b| Ok(a | b));
+                match failure {
+                    Ok(changed) => changed,
+                    Err((particle, cause)) => {
+                        // `try_reduce` may meet any failing chunk first: name the lowest failing
+                        // particle, whatever the thread count.
+                        let particle = (0..particle)
+                            .find(|&p| shape.stencil(positions[p]).is_err())
+                            .unwrap_or(particle);
+                        let cause = shape.stencil(positions[particle]).err().unwrap_or(cause);
+                        self.scratch.located = false;
+                        return Err(SolverError::OutsideGrid {
+                            step: self.step + 1,
+                            particle,
+                            position: positions[particle],
+                            cause,
+                        });
                     }
                 }
-                Ok(changed)
-            })
-            .try_reduce(|| false, |a, b| Ok(a | b));
-        let changed = match failure {
-            Ok(changed) => changed,
-            Err((particle, cause)) => {
-                // `try_reduce` may meet any failing chunk first: name the lowest failing particle,
-                // whatever the thread count.
-                let particle = (0..particle)
-                    .find(|&p| shape.stencil(positions[p]).is_err())
-                    .unwrap_or(particle);
-                let cause = shape.stencil(positions[particle]).err().unwrap_or(cause);
-                self.scratch.located = false;
-                return Err(SolverError::OutsideGrid {
-                    step: self.step + 1,
-                    particle,
-                    position: positions[particle],
-                    cause,
-                });
             }
         };
         if reusable && !changed {
@@ -81,7 +89,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.located = true;
         sc.active.rebuild(sc.node_ids.iter().flatten().copied());
         let active = &sc.active;
-        sc.node_index.par_chunks_mut(CHUNK).zip(sc.node_ids.par_chunks(CHUNK)).for_each(
+        sc.node_index.par_chunks_mut(chunk).zip(sc.node_ids.par_chunks(chunk)).for_each(
             |(idx, ids)| {
                 for (idx, ids) in idx.iter_mut().zip(ids) {
                     // Every stencil node was inserted by the rebuild just above.
@@ -192,7 +200,9 @@ mod tests {
     use crate::{Boundaries, Solver, SolverConfig, Vector};
 
     /// A block sliding across cells on a frictional floor: stencils change nodes on some steps
-    /// and not on others, so both locate paths are taken.
+    /// and not on others, so both locate paths are taken; `force_full_locate` makes every step
+    /// recompute the stencils and the numbering instead of taking the stencils the last step's
+    /// stress update computed ahead.
     fn sliding(force_full_locate: bool) -> Vec<u64> {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap();
         let mut particles = Particles::default();
@@ -221,6 +231,7 @@ mod tests {
         for _ in 0..400 {
             if force_full_locate {
                 s.scratch.located = false;
+                s.scratch.stencils_ahead = None;
             }
             s.step().unwrap();
         }

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
-use crate::par::CHUNK;
+use crate::par::chunk_len;
 use crate::solver::Solver;
 use crate::stages::timestep::{SLOWEST, faster, particle_signal};
 
@@ -26,114 +26,153 @@ struct ChunkTally {
     apex: usize,
     /// the chunk's fastest signal, when the step asked for it
     signal: (Real, usize),
+    /// some particle's next stencil has other nodes than its last one
+    changed: bool,
+    /// some particle has left the grid
+    outside: bool,
 }
 
 impl Default for ChunkTally {
     fn default() -> Self {
-        Self { dissipation: 0.0, cone: 0, apex: 0, signal: SLOWEST }
+        Self { dissipation: 0.0, cone: 0, apex: 0, signal: SLOWEST, changed: false, outside: false }
     }
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// updates every particle's stress, state and volume over `dt` from the nodal velocities in
     /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns the numbers of
-    /// cone and apex returns. With `last`, this is the step's last particle loop, particle
-    /// velocities are final, and it also finds the next step's fastest signal (`timestep.rs`).
+    /// cone and apex returns. With `last`, this is the step's last particle loop: positions and
+    /// velocities are final, and once a particle's old gradients are used it also computes the
+    /// particle's stencil for the next step (which `locate` then need not recompute) and its
+    /// signal for the next time step (`timestep.rs`).
     pub(crate) fn update_stress(
         &mut self,
         dt: Real,
         last: bool,
     ) -> Result<(usize, usize), SolverError> {
-        let moduli = &self.p_modulus;
-        let sc = &self.scratch;
+        let (moduli, caps) = (&self.p_modulus, &self.signal_cap);
+        let shape = &self.shape;
+        let sc = &mut self.scratch;
+        // Set again below once every particle's next stencil is in place.
+        sc.stencils_ahead = None;
+        if last {
+            // A failure part-way would leave new node ids beside the old numbering.
+            sc.located = false;
+        }
         let nodal = &sc.velocity;
-        let (idx, grad) = (&sc.node_index, &sc.gradients);
+        let idx = &sc.node_index;
         let materials = &self.materials;
         let objective = self.config.objective_stress;
         let step = self.step + 1;
         let p = &mut self.particles;
         let (position, material) = (&p.position, &p.material);
         let (mass, velocity) = (&p.mass, &p.velocity);
+        let chunk = chunk_len(p.len());
 
-        let results: Vec<Result<ChunkTally, SolverError>> =
-            p.stress
-                .par_chunks_mut(CHUNK)
-                .zip(p.state.par_chunks_mut(CHUNK))
-                .zip(p.volume.par_chunks_mut(CHUNK))
-                .enumerate()
-                .map(|(c, ((stress, state), volume))| {
-                    let mut tally = ChunkTally::default();
-                    for j in 0..stress.len() {
-                        let q = c * CHUNK + j;
-                        let mut l = Matrix::ZERO;
-                        for k in 0..N {
-                            let v = nodal[idx[q][k] as usize];
-                            let g: Vector = grad[q][k];
-                            l += Matrix::from_cols(v * g.x, v * g.y);
-                        }
-                        let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
-                        let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
-                        let d_eps = SymTensor::plane(dt * lxx, dt * lyy, 0.5 * dt * (lxy + lyx));
-                        let model = &materials[usize::from(material[q])];
-                        if objective {
-                            let theta = 0.5 * dt * (lyx - lxy);
-                            if theta != 0.0 {
-                                let r = DMat3::from_rotation_z(theta);
-                                stress[j] = stress[j].rotated(&r);
-                                model.rotate_state(&mut state[j], &r);
+        let results: Vec<Result<ChunkTally, SolverError>> = p
+            .stress
+            .par_chunks_mut(chunk)
+            .zip(p.state.par_chunks_mut(chunk))
+            .zip(p.volume.par_chunks_mut(chunk))
+            .zip(sc.node_ids.par_chunks_mut(chunk))
+            .zip(sc.weights.par_chunks_mut(chunk))
+            .zip(sc.gradients.par_chunks_mut(chunk))
+            .enumerate()
+            .map(|(c, (((((stress, state), volume), ids), weights), grads))| {
+                let mut tally = ChunkTally::default();
+                for j in 0..stress.len() {
+                    let q = c * chunk + j;
+                    let mut l = Matrix::ZERO;
+                    for k in 0..N {
+                        let v = nodal[idx[q][k] as usize];
+                        let g: Vector = grads[j][k];
+                        l += Matrix::from_cols(v * g.x, v * g.y);
+                    }
+                    if last {
+                        // the next step's stencil, at the final position (`locate.rs`).
+                        match shape.stencil(position[q]) {
+                            Ok(s) => {
+                                tally.changed |= ids[j] != s.nodes;
+                                ids[j] = s.nodes;
+                                weights[j] = s.weights;
+                                grads[j] = s.gradients;
                             }
+                            // `locate` repeats the search and names the particle.
+                            Err(_) => tally.outside = true,
                         }
-                        let report = model.update(&mut stress[j], &mut state[j], &d_eps).map_err(
-                            |source| SolverError::Constitutive {
+                    }
+                    let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
+                    let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
+                    let d_eps = SymTensor::plane(dt * lxx, dt * lyy, 0.5 * dt * (lxy + lyx));
+                    let model = &materials[usize::from(material[q])];
+                    if objective {
+                        let theta = 0.5 * dt * (lyx - lxy);
+                        if theta != 0.0 {
+                            let r = DMat3::from_rotation_z(theta);
+                            stress[j] = stress[j].rotated(&r);
+                            model.rotate_state(&mut state[j], &r);
+                        }
+                    }
+                    let report =
+                        model.update(&mut stress[j], &mut state[j], &d_eps).map_err(|source| {
+                            SolverError::Constitutive {
                                 step,
                                 particle: q,
                                 position: position[q],
                                 source,
-                            },
-                        )?;
-                        let ratio = 1.0 + d_eps.trace();
-                        if ratio.is_nan() || ratio <= 0.0 {
-                            return Err(SolverError::Inverted {
-                                step,
-                                particle: q,
-                                position: position[q],
-                                ratio,
-                            });
-                        }
-                        if M::IS_PLASTIC {
-                            // Dissipation per unit volume, over the volume at the start of the increment.
-                            tally.dissipation += volume[j] * report.dissipation;
-                            match report.surface {
-                                Surface::Cone => tally.cone += 1,
-                                Surface::Apex => tally.apex += 1,
-                                Surface::Elastic => {}
                             }
-                        }
-                        // No finiteness check of the new stress: the model returns a finite
-                        // stress or an error for finite input (ConstitutiveModel::update), and a
-                        // stress that an absurd increment overflowed is refused as input at the
-                        // next step, naming the particle.
-                        volume[j] *= ratio;
-                        if last {
-                            let m = moduli[usize::from(material[q])];
-                            let signal = particle_signal(m, volume[j], mass[q], velocity[q]);
-                            tally.signal = faster(tally.signal, (signal, q));
+                        })?;
+                    let ratio = 1.0 + d_eps.trace();
+                    if ratio.is_nan() || ratio <= 0.0 {
+                        return Err(SolverError::Inverted {
+                            step,
+                            particle: q,
+                            position: position[q],
+                            ratio,
+                        });
+                    }
+                    if M::IS_PLASTIC {
+                        // Dissipation per unit volume, over the volume at the start of the increment.
+                        tally.dissipation += volume[j] * report.dissipation;
+                        match report.surface {
+                            Surface::Cone => tally.cone += 1,
+                            Surface::Apex => tally.apex += 1,
+                            Surface::Elastic => {}
                         }
                     }
-                    Ok(tally)
-                })
-                .collect();
+                    // No finiteness check of the new stress: the model returns a finite
+                    // stress or an error for finite input (ConstitutiveModel::update), and a
+                    // stress that an absurd increment overflowed is refused as input at the
+                    // next step, naming the particle.
+                    volume[j] *= ratio;
+                    if last {
+                        let m = usize::from(material[q]);
+                        let signal =
+                            particle_signal(moduli[m], caps[m], volume[j], mass[q], velocity[q]);
+                        tally.signal = faster(tally.signal, (signal, q));
+                    }
+                }
+                Ok(tally)
+            })
+            .collect();
 
         let (mut cone, mut apex, mut signal) = (0, 0, SLOWEST);
+        let (mut changed, mut outside) = (false, false);
         for r in results {
             let t = r?;
             self.dissipation.plastic += t.dissipation;
             cone += t.cone;
             apex += t.apex;
             signal = faster(signal, t.signal);
+            changed |= t.changed;
+            outside |= t.outside;
         }
         if last {
             self.next_signal = Some(signal);
+            if !outside {
+                self.scratch.located = true;
+                self.scratch.stencils_ahead = Some(changed);
+            }
         }
         Ok((cone, apex))
     }
