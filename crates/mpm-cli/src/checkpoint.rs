@@ -10,8 +10,9 @@ use crate::model::SavedState;
 use crate::output::atomic;
 use crate::run::History;
 
-/// Format version of the checkpoint file; bumped when its layout changes.
-pub(crate) const FORMAT: u32 = 1;
+/// Format version of the checkpoint file; bumped when its layout changes (2: the history
+/// carries the output time, the solver state the time step's reference densities).
+pub(crate) const FORMAT: u32 = 2;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -48,17 +49,21 @@ pub(crate) fn write(path: &Path, c: &CheckpointFile) -> Result<(), RunError> {
 pub(crate) fn read(path: &Path) -> Result<CheckpointFile, RunError> {
     let bytes =
         std::fs::read(path).map_err(|source| RunError::Io { path: path.to_path_buf(), source })?;
+    // The format leads the file: read it alone first, so that another layout is named as such.
+    match bincode::serde::decode_from_slice::<u32, _>(&bytes, config()) {
+        Ok((format, _)) if format != FORMAT => {
+            return Err(RunError::Checkpoint {
+                path: path.to_path_buf(),
+                reason: format!("format {format} but this mpm reads format {FORMAT}"),
+            });
+        }
+        _ => {}
+    }
     let (c, _): (CheckpointFile, usize) = bincode::serde::decode_from_slice(&bytes, config())
         .map_err(|e| RunError::Checkpoint {
             path: path.to_path_buf(),
             reason: format!("not a readable mpm checkpoint ({e})"),
         })?;
-    if c.format != FORMAT {
-        return Err(RunError::Checkpoint {
-            path: path.to_path_buf(),
-            reason: format!("format {} but this mpm reads format {FORMAT}", c.format),
-        });
-    }
     Ok(c)
 }
 

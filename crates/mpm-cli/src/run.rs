@@ -63,6 +63,9 @@ pub(crate) struct History {
     /// wall time and particle-steps of earlier sessions.
     wall_time: f64,
     particle_steps: f64,
+    /// wall time spent writing frames and time series, over all sessions (s).
+    #[serde(default)]
+    output_time: f64,
     initial: Option<RunoutMetrics>,
 }
 
@@ -108,8 +111,7 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             };
             let frames =
                 if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
-            // ASCII VTK: about 60 bytes of points and cells plus 35 per field and particle.
-            let per_frame = 400 + (60 + 35 * r.output.fields.len() as u64) * r.seeds.len() as u64;
+            let per_frame = vtk::frame_bytes(r.seeds.len(), &r.output.fields, r.output.vtk_format);
             Ok(CheckReport {
                 particles: r.seeds.len(),
                 cells,
@@ -148,7 +150,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
         prepare_dir(dir, opts.force)?;
         atomic::write(&dir.join("scene.toml"), scene.text.as_bytes())?;
     }
-    with_pool(opts, |threads| {
+    with_pool(opts, scene.r.seeds.len(), |threads| {
         model::dispatch(
             scene,
             RunJob { opts, resume: None, threads, out_dir: opts.out_dir.clone() },
@@ -170,7 +172,7 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     }
     let c = checkpoint::read(&path)?;
     let scene = load_scene_str(&c.scene_text, &c.origin)?;
-    with_pool(opts, |threads| {
+    with_pool(opts, scene.r.seeds.len(), |threads| {
         model::dispatch(
             &scene,
             RunJob {
@@ -183,17 +185,21 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     })
 }
 
+/// runs `f` in a pool of the requested threads (default: one per core), but no more than a
+/// scene of `particles` particles can use (`mpm_solver::useful_threads`): a small scene on two
+/// threads would only pay for the hand-offs. The results are the same for any count.
 fn with_pool<T>(
     opts: &RunOptions,
+    particles: usize,
     f: impl FnOnce(usize) -> Result<T, RunError> + Send,
 ) -> Result<T, RunError>
 where
     T: Send,
 {
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = opts.threads {
-        b = b.num_threads(n.max(1));
-    }
+    // rayon's global pool size follows RAYON_NUM_THREADS, else one thread per core.
+    let available = opts.threads.unwrap_or_else(rayon::current_num_threads);
+    let b = rayon::ThreadPoolBuilder::new()
+        .num_threads(mpm_solver::useful_threads(particles, available.max(1)));
     let pool = b.build().map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
     pool.install(|| f(rayon::current_num_threads()))
 }
@@ -269,6 +275,7 @@ impl Job for RunJob<'_> {
             scene,
             dir: self.out_dir.as_deref(),
             history,
+            flushed: Flushed::default(),
             progress: Progress::new(
                 self.opts.quiet,
                 r.end_time,
@@ -285,6 +292,8 @@ impl Job for RunJob<'_> {
             driver.record_series(&solver);
             driver.write_frame(&solver)?;
             driver.flush_series()?;
+        } else {
+            driver.rewrite_outputs()?;
         }
         let session_steps0 = solver.step_count();
         let start = Instant::now();
@@ -334,10 +343,19 @@ struct Driver<'a> {
     scene: &'a Scene,
     dir: Option<&'a Path>,
     history: History,
+    flushed: Flushed,
     progress: Progress,
     interrupt: Option<Arc<AtomicBool>>,
     stop_after: Option<f64>,
     io_error: Option<RunError>,
+}
+
+/// Rows of each series this session has on disk.
+#[derive(Clone, Copy, Debug, Default)]
+struct Flushed {
+    energy: usize,
+    probes: usize,
+    runout: usize,
 }
 
 /// A slot time counts as reached when the clock is within this fraction of the interval of it
@@ -413,21 +431,66 @@ impl Driver<'_> {
         if !r.output.vtk {
             return Ok(());
         }
+        let clock = Instant::now();
         let name = format!("frames/particles_{:06}.vtp", self.history.frames.len());
-        let text =
-            vtk::frame(solver.particles(), solver.materials(), &r.output.fields, solver.time());
-        atomic::write(&dir.join(&name), text.as_bytes())?;
+        let path = dir.join(&name);
+        let frame = vtk::frame(
+            solver.particles(),
+            solver.materials(),
+            &r.output.fields,
+            r.output.vtk_format,
+            solver.time(),
+        )
+        .map_err(|source| RunError::Io { path: path.clone(), source })?;
+        atomic::write_parts(&path, &frame.parts())?;
         self.history.frames.push((solver.time(), name));
-        atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())
+        // The collection is small (a line per frame): rewritten whole, atomically.
+        atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())?;
+        self.history.output_time += clock.elapsed().as_secs_f64();
+        Ok(())
     }
 
-    fn flush_series(&self) -> Result<(), RunError> {
+    /// rewrites the files a killed or stopped session may have written past its checkpoint
+    /// (rows, a torn last line, frames in the collection) from the history, before a resumed
+    /// run continues them.
+    fn rewrite_outputs(&mut self) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        atomic::write(&dir.join("energy.csv"), csv::energy(&self.history.energy).as_bytes())?;
-        atomic::write(&dir.join("runout.csv"), csv::runout(&self.history.runout).as_bytes())?;
-        if !self.scene.r.output.probes.is_empty() {
-            atomic::write(&dir.join("probes.csv"), csv::probes(&self.history.probes).as_bytes())?;
+        self.flushed = Flushed::default();
+        self.flush_series()?;
+        if self.scene.r.output.vtk {
+            atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())?;
         }
+        Ok(())
+    }
+
+    fn flush_series(&mut self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        let clock = Instant::now();
+        let (h, f) = (&self.history, &mut self.flushed);
+        csv::flush(
+            &dir.join("energy.csv"),
+            csv::ENERGY_HEADER,
+            &h.energy,
+            &mut f.energy,
+            csv::energy,
+        )?;
+        csv::flush(
+            &dir.join("runout.csv"),
+            csv::RUNOUT_HEADER,
+            &h.runout,
+            &mut f.runout,
+            csv::runout,
+        )?;
+        if !self.scene.r.output.probes.is_empty() {
+            csv::flush(
+                &dir.join("probes.csv"),
+                csv::PROBES_HEADER,
+                &h.probes,
+                &mut f.probes,
+                csv::probes,
+            )?;
+        }
+        self.history.output_time += clock.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -483,6 +546,7 @@ impl Driver<'_> {
             } else {
                 0.0
             },
+            output_time_s: h.output_time,
             threads,
             energy: solver.energy(),
             runout: h.runout.last().copied().unwrap_or_default(),

@@ -420,6 +420,30 @@ impl VtkField {
     ];
 }
 
+/// How the VTK frames store their arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtkFormat {
+    /// raw little-endian values appended after the XML (the default: fast and exact).
+    #[default]
+    Binary,
+    /// the raw values compressed with zlib in blocks (smaller files, slower to write).
+    Compressed,
+    /// decimal text, one array per element (for reading or diffing frames as text).
+    Ascii,
+}
+
+impl VtkFormat {
+    /// the name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            VtkFormat::Binary => "binary",
+            VtkFormat::Compressed => "compressed",
+            VtkFormat::Ascii => "ascii",
+        }
+    }
+}
+
 /// A probe: a particle index, or the particle nearest to a point at t = 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ProbeSpec {
@@ -509,6 +533,9 @@ pub struct OutputSpec {
     /// write VTK frames, default true.
     #[serde(default)]
     pub vtk: Option<bool>,
+    /// `"binary"` (default), `"compressed"` or `"ascii"`.
+    #[serde(default)]
+    pub vtk_format: Option<VtkFormat>,
     /// write PNG plots, default true.
     #[serde(default)]
     pub plots: Option<bool>,

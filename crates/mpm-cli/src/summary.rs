@@ -93,6 +93,10 @@ pub struct RunSummary {
     pub wall_time_s: f64,
     /// particles × steps / wall time.
     pub particle_steps_per_s: f64,
+    /// wall-clock time spent writing particle frames and time series, over all sessions (s);
+    /// the frames and rows written during the steps are also part of `wall_time_s`.
+    #[serde(default)]
+    pub output_time_s: f64,
     /// rayon threads used.
     pub threads: usize,
     /// the energy ledger at the end (J per metre of thickness).

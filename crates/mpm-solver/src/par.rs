@@ -23,9 +23,11 @@ pub fn chunk_len(n: usize) -> usize {
 }
 
 /// Particles each thread needs before another thread pays for its hand-offs: below this a step's
-/// loops are so short that waking a second worker for each of them costs what it saves
-/// (measured on the flume and a collapsing column, 2 cores; see the README's performance notes).
-pub const PARTICLES_PER_THREAD: usize = 2000;
+/// loops are so short that handing half of each to a second worker costs what it saves.
+/// Measured with `mpm run` on 2 cores (2 threads against 1): the flume (336 particles) 0.96×,
+/// a collapsing column of 800 particles 0.86×, of 1 568 0.97×, of 3 200 1.12–1.18×, of 12 800
+/// 1.41×; so a second thread from 2 400 particles.
+pub const PARTICLES_PER_THREAD: usize = 1200;
 
 /// how many of `available` threads a scene of `particles` particles should use: at least one,
 /// and one more per [`PARTICLES_PER_THREAD`] particles. Results do not depend on it (every loop

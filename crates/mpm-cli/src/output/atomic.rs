@@ -1,6 +1,9 @@
 //! Atomic file writes: write a temporary file beside the target, then rename it over the
-//! target, so that a run killed at any moment leaves only complete files.
+//! target, so that a run killed at any moment leaves only complete files. Time series grow by
+//! appends of whole lines instead, one write each: only a run killed inside that write can leave
+//! a torn last line, and `mpm resume` rewrites the file from its checkpoint.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::error::RunError;
@@ -21,6 +24,29 @@ pub(crate) fn write(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
     let tmp = temp_path(path);
     std::fs::write(&tmp, bytes).map_err(|source| RunError::Io { path: tmp.clone(), source })?;
     commit(&tmp, path)
+}
+
+/// writes `parts` one after the other to `path` atomically (no copy into one buffer).
+pub(crate) fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), RunError> {
+    let tmp = temp_path(path);
+    let io = |source| RunError::Io { path: tmp.clone(), source };
+    let mut file = std::fs::File::create(&tmp).map_err(io)?;
+    for part in parts {
+        if let Err(source) = file.write_all(part) {
+            drop(file);
+            let _ = std::fs::remove_file(&tmp);
+            return Err(io(source));
+        }
+    }
+    drop(file);
+    commit(&tmp, path)
+}
+
+/// appends `bytes` (whole lines) to the existing file at `path` with one `write_all`.
+pub(crate) fn append(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
+    let io = |source| RunError::Io { path: path.to_path_buf(), source };
+    let mut file = std::fs::OpenOptions::new().append(true).open(path).map_err(io)?;
+    file.write_all(bytes).map_err(io)
 }
 
 /// renames a finished temporary file over its target.

@@ -1,12 +1,16 @@
 //! CSV time series: the energy ledger, probe particles and runout metrics.
 //!
 //! Every file has a header line; times in s, lengths in m, energies in J per metre of thickness.
+//! The row functions append lines to a buffer, so that a run writes only its new rows.
 
 use std::fmt::Write;
+use std::path::Path;
 
 use mpm_solver::EnergyLedger;
 use serde::{Deserialize, Serialize};
 
+use crate::error::RunError;
+use crate::output::atomic;
 use crate::summary::RunoutMetrics;
 
 /// One row of `energy.csv`.
@@ -35,11 +39,43 @@ pub(crate) struct ProbeRow {
     pub reference: Option<f64>,
 }
 
-pub(crate) fn energy(rows: &[EnergyRow]) -> String {
-    let mut s = String::from(
-        "time,step,dt,kinetic,strain,potential,plastic_dissipation,friction_work,\
-         constraint_work,external_work,residual,stored,dissipated,total\n",
-    );
+/// brings the CSV file at `path` up to `rows`, of which `flushed` are on disk: the first flush
+/// of a session writes the header and every row atomically (replacing whatever the file held);
+/// later ones append only the new rows, with one write.
+pub(crate) fn flush<R>(
+    path: &Path,
+    header: &str,
+    rows: &[R],
+    flushed: &mut usize,
+    lines: fn(&mut String, &[R]),
+) -> Result<(), RunError> {
+    if *flushed == 0 {
+        let mut text = String::from(header);
+        lines(&mut text, rows);
+        atomic::write(path, text.as_bytes())?;
+    } else if let Some(new) = rows.get(*flushed..).filter(|new| !new.is_empty()) {
+        let mut text = String::new();
+        lines(&mut text, new);
+        atomic::append(path, text.as_bytes())?;
+    }
+    *flushed = rows.len();
+    Ok(())
+}
+
+/// header line of `energy.csv`.
+pub(crate) const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_dissipation,\
+     friction_work,constraint_work,external_work,residual,stored,dissipated,total\n";
+
+/// header line of `probes.csv`.
+pub(crate) const PROBES_HEADER: &str =
+    "time,probe,particle,x,y,ux,uy,vx,vy,displacement_along,reference_along\n";
+
+/// header line of `runout.csv`.
+pub(crate) const RUNOUT_HEADER: &str =
+    "time,front_x,tail_x,leading_x,front_travel,max_thickness,com_x,com_y,com_travel\n";
+
+/// appends the lines of `rows` to `s`.
+pub(crate) fn energy(s: &mut String, rows: &[EnergyRow]) {
     for r in rows {
         let e = &r.ledger;
         let _ = writeln!(
@@ -61,16 +97,14 @@ pub(crate) fn energy(rows: &[EnergyRow]) -> String {
             e.total()
         );
     }
-    s
 }
 
-pub(crate) fn probes(rows: &[ProbeRow]) -> String {
-    let mut s =
-        String::from("time,probe,particle,x,y,ux,uy,vx,vy,displacement_along,reference_along\n");
+/// appends the lines of `rows` to `s`.
+pub(crate) fn probes(s: &mut String, rows: &[ProbeRow]) {
     for r in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},",
             r.time,
             r.probe,
             r.particle,
@@ -81,16 +115,16 @@ pub(crate) fn probes(rows: &[ProbeRow]) -> String {
             r.velocity[0],
             r.velocity[1],
             r.along,
-            r.reference.map_or(String::new(), |v| v.to_string())
         );
+        if let Some(v) = r.reference {
+            let _ = write!(s, "{v}");
+        }
+        s.push('\n');
     }
-    s
 }
 
-pub(crate) fn runout(rows: &[RunoutMetrics]) -> String {
-    let mut s = String::from(
-        "time,front_x,tail_x,leading_x,front_travel,max_thickness,com_x,com_y,com_travel\n",
-    );
+/// appends the lines of `rows` to `s`.
+pub(crate) fn runout(s: &mut String, rows: &[RunoutMetrics]) {
     for r in rows {
         let _ = writeln!(
             s,
@@ -106,5 +140,44 @@ pub(crate) fn runout(rows: &[RunoutMetrics]) -> String {
             r.com_travel
         );
     }
-    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn metrics(time: f64) -> RunoutMetrics {
+        RunoutMetrics { time, front_x: 2.0 * time, ..RunoutMetrics::default() }
+    }
+
+    #[test]
+    fn flushes_create_the_file_once_then_append_only_new_rows() {
+        let dir = std::env::temp_dir().join(format!("mpm-csv-flush-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("runout.csv");
+        std::fs::write(&path, "stale,rows\n1,2\n").unwrap();
+        let mut rows = vec![metrics(0.0), metrics(0.5)];
+        let mut flushed = 0;
+        flush(&path, RUNOUT_HEADER, &rows, &mut flushed, runout).unwrap();
+        assert_eq!(flushed, 2);
+        let first = std::fs::read_to_string(&path).unwrap();
+        assert!(first.starts_with(RUNOUT_HEADER) && !first.contains("stale"));
+        assert_eq!(first.lines().count(), 3);
+        // a mark in the written part survives later flushes: they only append
+        let marked = first.replacen("time,", "TIME,", 1);
+        std::fs::write(&path, &marked).unwrap();
+        flush(&path, RUNOUT_HEADER, &rows, &mut flushed, runout).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), marked);
+        rows.push(metrics(1.0));
+        flush(&path, RUNOUT_HEADER, &rows, &mut flushed, runout).unwrap();
+        let mut all = String::from(RUNOUT_HEADER);
+        runout(&mut all, &rows);
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), all.replacen("time,", "TIME,", 1));
+        assert_eq!(flushed, 3);
+        // a new session (nothing flushed) rewrites the file whole
+        let mut fresh = 0;
+        flush(&path, RUNOUT_HEADER, &rows[..2], &mut fresh, runout).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), first);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

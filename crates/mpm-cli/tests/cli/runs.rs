@@ -81,7 +81,10 @@ fn short_runs_write_every_output_file() {
         assert_eq!(json["steps"].as_u64(), Some(summary.steps));
         let pvd = std::fs::read_to_string(dir.join("particles.pvd")).unwrap();
         assert_eq!(pvd.matches("<DataSet").count(), 5, "{name}: {pvd}");
-        let vtp = std::fs::read_to_string(dir.join("frames/particles_000004.vtp")).unwrap();
+        // binary frames: the XML before the appended data names the arrays
+        let vtp = std::fs::read(dir.join("frames/particles_000004.vtp")).unwrap();
+        let vtp = String::from_utf8_lossy(&vtp);
+        assert!(vtp.contains("<AppendedData encoding=\"raw\">"), "{name}");
         for field in ["stress", "velocity", "displacement", "plastic_strain", "body", "density"] {
             assert!(vtp.contains(&format!("Name=\"{field}\"")), "{name}: no {field}");
         }
@@ -124,6 +127,116 @@ fn resume_continues_bit_identically() {
     assert_eq!(resumed.simulated_time.to_bits(), straight.simulated_time.to_bits());
     assert_eq!(resumed.state_hash, straight.state_hash);
     assert_eq!(resumed.energy, straight.energy);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// every file of an output directory that a run writes deterministically (not the summary, the
+/// plots or the checkpoint), by relative path.
+fn deterministic_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for sub in ["", "frames"] {
+        for e in std::fs::read_dir(dir.join(sub)).unwrap().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let keep = name.ends_with(".csv") || name.ends_with(".vtp") || name.ends_with(".pvd");
+            if keep {
+                let rel = if sub.is_empty() { name } else { format!("{sub}/{name}") };
+                out.push((rel, std::fs::read(e.path()).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// the times of a CSV file's rows.
+fn row_times(csv: &[u8]) -> Vec<f64> {
+    String::from_utf8_lossy(csv)
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn a_resumed_run_writes_the_files_of_an_uninterrupted_one() {
+    // energy.csv, runout.csv, probes.csv, the collection and every frame, byte for byte: the
+    // stop writes a row and a frame past its checkpoint, which the resumed run replaces.
+    let scene = short("flume", 0.06).modified(|f| f.output.series_interval = Some(0.004)).unwrap();
+    let straight = temp_dir("straight");
+    run_scene(&scene, &opts(&straight)).unwrap();
+    let dir = temp_dir("resumed");
+    let stopped = run_scene(&scene, &RunOptions { stop_after: Some(0.025), ..opts(&dir) }).unwrap();
+    assert_eq!(stopped.status, RunStatus::Interrupted);
+    let stop_row = *row_times(&std::fs::read(dir.join("energy.csv")).unwrap()).last().unwrap();
+    let rows = row_times(&std::fs::read(straight.join("energy.csv")).unwrap());
+    assert!(!rows.contains(&stop_row), "the stop's row at {stop_row} s is not a series row");
+    resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let (a, b) = (deterministic_files(&straight), deterministic_files(&dir));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    assert!(a.iter().any(|f| f.0 == "energy.csv") && a.iter().any(|f| f.0 == "probes.csv"));
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name} differs after resume");
+    }
+    std::fs::remove_dir_all(&straight).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_killed_run_resumes_without_duplicate_or_torn_rows() {
+    // A run killed after its last checkpoint has rows past it on disk, the last one torn.
+    let scene =
+        short("free_fall", 0.04).modified(|f| f.output.checkpoint_interval = Some(0.015)).unwrap();
+    let dir = temp_dir("killed");
+    run_scene(&scene, &opts(&dir)).unwrap();
+    let complete = deterministic_files(&dir);
+    let energy = std::fs::read(dir.join("energy.csv")).unwrap();
+    let mut torn = energy.clone();
+    torn.extend_from_slice(b"0.0412,57,1.2e-");
+    std::fs::write(dir.join("energy.csv"), &torn).unwrap();
+    // The last periodic checkpoint is at t ≈ 0.03 s, before a quarter of the rows.
+    resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let resumed = std::fs::read(dir.join("energy.csv")).unwrap();
+    let times = row_times(&resumed);
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "rows repeated or out of order");
+    assert!(resumed == energy, "energy.csv differs from the uninterrupted run's");
+    assert_eq!(deterministic_files(&dir), complete);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn every_vtk_format_writes_frames_of_its_kind() {
+    for (format, marker) in [
+        ("binary", "<AppendedData encoding=\"raw\">"),
+        ("compressed", "compressor=\"vtkZLibDataCompressor\""),
+        ("ascii", "format=\"ascii\">"),
+    ] {
+        let text = embedded_scene("free_fall")
+            .unwrap()
+            .replace("end_time = 1.0", "end_time = 0.01")
+            .replace("[output]", &format!("[output]\nvtk_format = \"{format}\""));
+        let scene = load_scene_str(&text, format).unwrap();
+        let dir = temp_dir(format);
+        run_scene(&scene, &opts(&dir)).unwrap();
+        let vtp = std::fs::read(dir.join("frames/particles_000001.vtp")).unwrap();
+        let vtp = String::from_utf8_lossy(&vtp);
+        assert!(vtp.contains(marker), "{format}");
+        assert_eq!(vtp.contains("AppendedData"), format != "ascii", "{format}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn a_checkpoint_of_another_format_is_refused_by_name() {
+    let dir = temp_dir("format");
+    std::fs::create_dir_all(&dir).unwrap();
+    // bincode's varint 1 (the format before the history carried the output time), then junk
+    std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
+    let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+    assert!(matches!(err, RunError::Checkpoint { .. }), "{err}");
+    assert!(err.to_string().contains("format 1 but this mpm reads format 2"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
