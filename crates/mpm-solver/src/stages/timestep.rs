@@ -4,18 +4,21 @@
 //! The fastest signal is s = max_p (c_p + |v_p|); Δt = C·L/s for a Courant number C, or a fixed Δt
 //! whose Courant number Δt·s/L must stay ≤ 1.
 //!
-//! **Which density.** ρ*_p = max(ρ_p, ρ_ref), with ρ_ref the lightest initial density of the
-//! particle's material: a particle compacted above it counts with its current density, a dilated
-//! one with ρ_ref. Eq 13 with the current density alone lets the loosest particle set Δt for
-//! everyone, and the loosest particles are those that have separated from the mass: grains
-//! thrown off the free surface or the front, whose volume grows by the FLIP strain increments of
-//! the few nodes they share with nothing, carry no stress (a cohesionless material cannot hold
-//! the tension) and transmit no wave. Their √(V_p/V_0) made the flume take 2.7× and a
-//! collapsing cohesionless column 3–9× the steps of the initial estimate. Capping c_p at the
-//! material's initial wave speed keeps Δt where the connected mass needs it. What it gives up:
-//! an elastic body stretched by a volumetric strain ε really carries waves √(1 + ε) faster, which
-//! the cap ignores, so its true Courant number is up to √(1 + ε) times the reported one (1 %
-//! at ε = 2 %; C ≤ 1 keeps a margin for that).
+//! **Which density.** The signal that sets Δt is s_p = max(ŝ_p, (C/C_max)·s̃_p) with
+//! s̃_p = c̃_p + |v_p| the particle's true signal (c̃_p = √(M/ρ_p), current density) and
+//! ŝ_p = ĉ_p + |v_p| its capped signal (ĉ_p = √(M/max(ρ_p, ρ_ref)), ρ_ref the lightest initial
+//! density of the particle's material). So a particle compacted above ρ_ref counts with its
+//! current density; a dilated one with ρ_ref, but never so far that its own Courant number
+//! Δt·s̃_p/L exceeds C_max = 1 ([`TRUE_COURANT_MAX`]). Eq 13 with the current density alone lets
+//! the loosest particle set Δt for everyone, and the loosest particles are those that have
+//! separated from the mass: grains thrown off the free surface or the front, whose volume grows
+//! by the FLIP strain increments of the few nodes they share with nothing, carry no stress (a
+//! cohesionless material cannot hold the tension) and transmit no wave. Their √(V_p/V_0) made
+//! the flume take 2.7× and a collapsing cohesionless column 3–5× the steps of the initial
+//! estimate. The bound keeps what eq 13 is for: at C = 0.1 a grain must dilate a hundredfold
+//! before it shortens Δt, at C = 0.8 by 1.56 (without the bound, a flume at C = 0.4 threw a
+//! grain dilated sevenfold, true Courant number 1.06, out of the grid). A fixed Δt is checked
+//! against the true signal.
 //!
 //! The signal needs every particle's final velocity and volume. Where a scheme's last particle loop
 //! sees both (the stress update that ends USL, MUSL and USAVG), that loop computes it for the next
@@ -33,7 +36,20 @@ use crate::math::{Real, Vector};
 use crate::par::chunk_len;
 use crate::solver::Solver;
 
+/// The largest Courant number Δt·s̃_p/L any particle may have with its true signal s̃_p
+/// (module docs): eq 13's own stability bound.
+pub const TRUE_COURANT_MAX: Real = 1.0;
+
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// the weight C/C_max of a particle's true signal against its capped one (module docs): 1
+    /// for a fixed Δt, whose Courant number is the true one.
+    pub(crate) fn true_signal_weight(&self) -> Real {
+        match self.config.time_step {
+            TimeStep::Courant(c) => c / TRUE_COURANT_MAX,
+            TimeStep::Fixed(_) => 1.0,
+        }
+    }
+
     /// (Δt, Courant number) of the next step, with Δt ≤ `max_dt`.
     pub(crate) fn time_step(&mut self, max_dt: Real) -> Result<(Real, Real), SolverError> {
         let (signal, particle) = match self.next_signal.take() {
@@ -83,6 +99,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let p = &self.particles;
         let n = p.len();
         let chunk = chunk_len(n);
+        let weight = self.true_signal_weight();
         (0..n.div_ceil(chunk))
             .into_par_iter()
             .map(|c| {
@@ -90,8 +107,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 for i in c * chunk..((c + 1) * chunk).min(n) {
                     let m = usize::from(p.material[i]);
                     let (modulus, cap) = (self.p_modulus[m], self.signal_cap[m]);
-                    let signal =
-                        particle_signal(modulus, cap, p.volume[i], p.mass[i], p.velocity[i]);
+                    let signal = particle_signal(
+                        modulus,
+                        cap,
+                        weight,
+                        p.volume[i],
+                        p.mass[i],
+                        p.velocity[i],
+                    );
                     best = faster(best, (signal, i));
                 }
                 best
@@ -103,20 +126,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 /// The identity of [`faster`]: no signal, no particle.
 pub(crate) const SLOWEST: (Real, usize) = (0.0, usize::MAX);
 
-/// c_p + |v_p| with c_p² = min(M V_p / m_p, `cap`) for P-wave modulus M and `cap` = M/ρ_ref (module
-/// docs); a non-finite value counts as infinite.
+/// max(ĉ_p + |v_p|, w (c̃_p + |v_p|)) with c̃_p² = M V_p / m_p for P-wave modulus M,
+/// ĉ_p² = min(c̃_p², `cap`), `cap` = M/ρ_ref and w = `weight` = C/C_max (module docs); a
+/// non-finite value counts as infinite.
 #[inline(always)]
 pub(crate) fn particle_signal(
     modulus: Real,
     cap: Real,
+    weight: Real,
     volume: Real,
     mass: Real,
     velocity: Vector,
 ) -> Real {
     let c2 = modulus * volume / mass;
+    let speed = velocity.length();
     // A NaN volume must stay NaN (reported below), which `f64::min` would hide.
-    let c2 = if c2 > cap { cap } else { c2 };
-    let s = c2.sqrt() + velocity.length();
+    let s = if c2 > cap {
+        (cap.sqrt() + speed).max(weight * (c2.sqrt() + speed))
+    } else {
+        c2.sqrt() + speed
+    };
     if s.is_finite() { s } else { Real::INFINITY }
 }
 
@@ -172,11 +201,29 @@ mod tests {
         let mut s = pair();
         let dt0 = s.time_step(f64::INFINITY).unwrap().0;
         assert!((dt0 / expected_dt(&s, 1000.0) - 1.0).abs() < DT_TOL);
-        // Ten times its volume (a grain thrown off the mass): the current density would give
-        // a √10 shorter step; the reference density keeps it.
-        s.particles_mut().volume[1] *= 10.0;
+        // 3.5 times its volume (a grain thrown off the mass): the current density would give a
+        // √3.5 shorter step; the reference density keeps it (its own Courant number,
+        // 0.5·√3.5 = 0.94, stays below 1).
+        s.particles_mut().volume[1] *= 3.5;
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert_eq!(dt, dt0);
+    }
+
+    #[test]
+    fn dilation_cannot_raise_a_particles_own_courant_number_above_one() {
+        let mut s = pair();
+        let dt0 = s.time_step(f64::INFINITY).unwrap().0;
+        // C = 0.5: a particle dilated fourfold has a true Courant number of exactly 1 at the
+        // initial Δt; dilated ninefold (true wave speed ×3) it must shorten Δt by 3/2.
+        s.particles_mut().volume[1] *= 4.0;
+        assert_eq!(s.time_step(f64::INFINITY).unwrap().0, dt0);
+        s.particles_mut().volume[1] *= 9.0 / 4.0;
+        let dt = s.time_step(f64::INFINITY).unwrap().0;
+        assert!((dt / (dt0 / 1.5) - 1.0).abs() < DT_TOL, "{dt} vs {}", dt0 / 1.5);
+        let c_true = (s.materials()[0].p_wave_modulus() * s.particles().volume[1]
+            / s.particles().mass[1])
+            .sqrt();
+        assert!(dt * c_true / 0.25 <= super::TRUE_COURANT_MAX * (1.0 + DT_TOL));
     }
 
     #[test]
