@@ -24,24 +24,24 @@ pub struct PresetSettings {
 }
 
 /// The table: (preset, settings), measured by `cargo xtask study` (README, "Speed and accuracy"):
-/// fast: sliding block 0.154 %, bar 0.916 %, flume 13.890 % (worse of error and energy residual), 1.05 s.
-/// balanced: sliding block 0.047 %, bar 0.768 %, flume 13.537 % (worse of error and energy residual), 1.39 s.
-/// accurate: sliding block 0.017 %, bar 1.672 %, flume 1.437 % (worse of error and energy residual), 5.85 s.
+/// fast: sliding block 0.047 %, bar 0.776 %, flume 1.152 % (worse of error and energy residual), 0.89 s.
+/// balanced: sliding block 0.017 %, bar 1.671 %, flume 1.325 % (worse of error and energy residual), 3.48 s.
+/// accurate: sliding block 0.017 %, bar 1.671 %, flume 1.325 % (worse of error and energy residual), 3.48 s.
 pub const PRESETS: [(Preset, PresetSettings); 3] = [
     (
         Preset::Fast,
         PresetSettings {
-            scheme: Scheme::Usavg,
-            shape_function: ShapeFunctionKind::Bspline,
-            courant: 0.4,
+            scheme: Scheme::Musl,
+            shape_function: ShapeFunctionKind::Gimp,
+            courant: 0.2,
         },
     ),
     (
         Preset::Balanced,
         PresetSettings {
             scheme: Scheme::Musl,
-            shape_function: ShapeFunctionKind::Gimp,
-            courant: 0.2,
+            shape_function: ShapeFunctionKind::Bspline,
+            courant: 0.05,
         },
     ),
     (
