@@ -29,8 +29,8 @@ pub fn chunk_len(n: usize) -> usize {
 /// 1.41×; so a second thread from 2 400 particles.
 pub const PARTICLES_PER_THREAD: usize = 1200;
 
-/// how many of `available` threads a scene of `particles` particles should use: at least one,
-/// and one more per [`PARTICLES_PER_THREAD`] particles. Results do not depend on it (every loop
+/// how many of `available` threads a scene of `particles` particles should use: one per whole
+/// [`PARTICLES_PER_THREAD`] particles, at least one (a second thread from 2 400 particles). Results do not depend on it (every loop
 /// is chunked by size alone), only the wall time does.
 pub fn useful_threads(particles: usize, available: usize) -> usize {
     (particles / PARTICLES_PER_THREAD).clamp(1, available.max(1))

@@ -308,7 +308,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             materials.iter().map(|m| m.elasticity().p_wave_modulus()).collect();
         let reference_density =
             reference_density(&particles, materials.len(), checkpoint.reference_density)?;
-        let signal_cap = p_modulus.iter().zip(&reference_density).map(|(m, r)| m / r).collect();
+        // A material no particle uses has no reference: no cap (its true signal counts).
+        let signal_cap = p_modulus
+            .iter()
+            .zip(&reference_density)
+            .map(|(m, r)| if r.is_finite() { m / r } else { Real::INFINITY })
+            .collect();
         let mut solver = Self {
             shape,
             materials,
@@ -544,7 +549,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 /// the time step's reference density of each material: the checkpoint's (a resumed run keeps the
 /// density it started with), or in a new run the lightest density of each material's particles
-/// (a material no particle uses gets +∞: its cap is never consulted).
+/// (a material no particle uses gets +∞, which leaves its particles uncapped should any appear).
 fn reference_density<St>(
     p: &Particles<St>,
     materials: usize,
@@ -558,11 +563,18 @@ fn reference_density<St>(
         }
         return Ok(lightest);
     }
-    if saved.len() != materials || saved.iter().any(|r| r.is_nan() || *r <= 0.0) {
+    if saved.len() != materials {
         return Err(SolverError::InvalidSetting {
             name: "checkpoint.reference_density",
             value: saved.len() as f64,
-            expected: "one positive density per material",
+            expected: "one reference density per material",
+        });
+    }
+    if let Some(&bad) = saved.iter().find(|r| r.is_nan() || **r <= 0.0) {
+        return Err(SolverError::InvalidSetting {
+            name: "checkpoint.reference_density",
+            value: bad,
+            expected: "a positive density (kg/m³)",
         });
     }
     Ok(saved)

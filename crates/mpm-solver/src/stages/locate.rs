@@ -204,6 +204,12 @@ mod tests {
     /// recompute the stencils and the numbering instead of taking the stencils the last step's
     /// stress update computed ahead.
     fn sliding(force_full_locate: bool) -> Vec<u64> {
+        sliding_with(force_full_locate, false)
+    }
+
+    /// `touch`: take `particles_mut()` before every step without changing anything, as scripted
+    /// loading does; the stencils computed ahead must then be recomputed, never trusted stale.
+    fn sliding_with(force_full_locate: bool, touch: bool) -> Vec<u64> {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap();
         let mut particles = Particles::default();
         let block = Shape::Rectangle { min: Vector::new(0.5, 0.0), max: Vector::new(1.5, 1.0) };
@@ -233,6 +239,9 @@ mod tests {
                 s.scratch.located = false;
                 s.scratch.stencils_ahead = None;
             }
+            if touch {
+                let _ = s.particles_mut();
+            }
             s.step().unwrap();
         }
         s.particles().position.iter().flat_map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
@@ -241,5 +250,13 @@ mod tests {
     #[test]
     fn reusing_an_unchanged_stencil_set_gives_the_same_bits_as_a_full_locate() {
         assert_eq!(sliding(false), sliding(true));
+    }
+
+    /// Regression: after a step whose particles changed nodes, `particles_mut` dropped the
+    /// stencils computed ahead but left the stale numbering marked as valid, so the next step
+    /// put mass and force on the wrong nodes.
+    #[test]
+    fn taking_the_particles_mutably_between_steps_changes_nothing() {
+        assert_eq!(sliding_with(false, true), sliding(false));
     }
 }
