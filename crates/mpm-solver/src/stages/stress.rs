@@ -348,11 +348,15 @@ mod tests {
             if transfer == Transfer::Apic {
                 let shape = QuadraticBSpline::new(grid);
                 let mut s = Solver::new(shape, vec![sand], particles, config).unwrap();
-                (0..300).for_each(|_| drop(s.step().unwrap()));
+                for _ in 0..300 {
+                    s.step().unwrap();
+                }
                 bits(s.particles())
             } else {
                 let mut s = Solver::new(Bilinear(grid), vec![sand], particles, config).unwrap();
-                (0..300).for_each(|_| drop(s.step().unwrap()));
+                for _ in 0..300 {
+                    s.step().unwrap();
+                }
                 bits(s.particles())
             }
         })
