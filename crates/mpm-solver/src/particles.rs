@@ -74,6 +74,29 @@ pub struct NewParticle<S> {
     pub body: u16,
 }
 
+impl<S> NewParticle<S> {
+    /// a stress-free particle of material 0 and body 0 (the usual start of a single-material
+    /// scene).
+    pub fn unstressed(
+        position: Vector,
+        velocity: Vector,
+        volume: Real,
+        density: Real,
+        state: S,
+    ) -> Self {
+        Self {
+            position,
+            velocity,
+            volume,
+            density,
+            stress: SymTensor::ZERO,
+            state,
+            material: 0,
+            body: 0,
+        }
+    }
+}
+
 impl<S> Particles<S> {
     /// an empty set with room for `n` particles.
     pub fn with_capacity(n: usize) -> Self {

@@ -201,7 +201,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 #[cfg(test)]
 mod tests {
-    use mpm_constitutive::{LinearElastic, SymTensor};
+    use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
     use mpm_grid::{Bilinear, RegularGrid};
 
@@ -217,16 +217,7 @@ mod tests {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [4, 4]).unwrap();
         let mut particles = Particles::default();
         for &(position, velocity, density) in seeds {
-            particles.push(NewParticle {
-                position,
-                velocity,
-                volume: 0.125 * 0.125,
-                density,
-                stress: SymTensor::ZERO,
-                state: (),
-                material: 0,
-                body: 0,
-            });
+            particles.push(NewParticle::unstressed(position, velocity, 0.125 * 0.125, density, ()));
         }
         let config = SolverConfig {
             boundaries: Boundaries {

@@ -7,12 +7,12 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Boundary, Friction};
-use mpm_grid::ShapeFunctions;
+use mpm_grid::{NodeId, ShapeFunctions, Stencil};
 use rayon::prelude::*;
 
 use crate::config::Transfer;
 use crate::error::SolverError;
-use crate::math::Vector;
+use crate::math::{Real, Vector};
 use crate::par::chunk_len;
 use crate::solver::{BoundaryNode, Mirror, Solver};
 
@@ -51,12 +51,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         for j in 0..ids.len() {
                             let p = c * chunk + j;
                             match shape.stencil(positions[p]) {
-                                Ok(s) => {
-                                    changed |= ids[j] != s.nodes;
-                                    ids[j] = s.nodes;
-                                    w[j] = s.weights;
-                                    g[j] = s.gradients;
-                                }
+                                Ok(s) => changed |= store(s, &mut ids[j], &mut w[j], &mut g[j]),
                                 Err(cause) => return Err((p, cause)),
                             }
                         }
@@ -189,9 +184,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
+/// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
+/// held (the active-node numbering must then be rebuilt). Used by `locate` and, for the stencils
+/// computed ahead, by the stress update.
+#[inline(always)]
+pub(crate) fn store<const N: usize>(
+    s: Stencil<N>,
+    ids: &mut [NodeId; N],
+    weights: &mut [Real; N],
+    gradients: &mut [Vector; N],
+) -> bool {
+    let changed = *ids != s.nodes;
+    *ids = s.nodes;
+    *weights = s.weights;
+    *gradients = s.gradients;
+    changed
+}
+
 #[cfg(test)]
 mod tests {
-    use mpm_constitutive::{LinearElastic, SymTensor};
+    use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
     use mpm_grid::{Bilinear, RegularGrid};
 
@@ -214,16 +226,8 @@ mod tests {
         let mut particles = Particles::default();
         let block = Shape::Rectangle { min: Vector::new(0.5, 0.0), max: Vector::new(1.5, 1.0) };
         for s in fill(&block, 0.125) {
-            particles.push(NewParticle {
-                position: s.position,
-                velocity: Vector::new(4.0, 0.0),
-                volume: s.area,
-                density: 1000.0,
-                stress: SymTensor::ZERO,
-                state: (),
-                material: 0,
-                body: 0,
-            });
+            let velocity = Vector::new(4.0, 0.0);
+            particles.push(NewParticle::unstressed(s.position, velocity, s.area, 1000.0, ()));
         }
         let config = SolverConfig {
             boundaries: Boundaries {

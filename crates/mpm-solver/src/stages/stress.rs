@@ -18,6 +18,7 @@ use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
 use crate::solver::Solver;
+use crate::stages::locate::store;
 use crate::stages::timestep::{SLOWEST, faster, particle_signal};
 
 /// What one chunk of particles reports back.
@@ -104,10 +105,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             // the next step's stencil, at the final position (`locate.rs`).
                             match shape.stencil(position[q]) {
                                 Ok(s) => {
-                                    tally.changed |= ids[j] != s.nodes;
-                                    ids[j] = s.nodes;
-                                    weights[j] = s.weights;
-                                    grads[j] = s.gradients;
+                                    tally.changed |=
+                                        store(s, &mut ids[j], &mut weights[j], &mut grads[j]);
                                 }
                                 // `locate` repeats the search and names the particle.
                                 Err(_) => tally.outside = true,
@@ -257,16 +256,8 @@ mod tests {
         let block = Shape::Rectangle { min: Vector::new(1.0, 1.0), max: Vector::new(2.0, 2.0) };
         for (k, seed) in fill(&block, 0.125).into_iter().enumerate() {
             let spin = 0.3 * (seed.position - Vector::splat(1.5)).perp();
-            particles.push(NewParticle {
-                position: seed.position,
-                velocity: spin + Vector::new(0.1 * (k % 3) as f64, 0.0),
-                volume: seed.area,
-                density: 1000.0,
-                stress: SymTensor::ZERO,
-                state: (),
-                material: 0,
-                body: 0,
-            });
+            let velocity = spin + Vector::new(0.1 * (k % 3) as f64, 0.0);
+            particles.push(NewParticle::unstressed(seed.position, velocity, seed.area, 1000.0, ()));
         }
         let config = SolverConfig {
             scheme: crate::Scheme::Usl,
@@ -315,16 +306,15 @@ mod tests {
         let block = Shape::Rectangle { min: Vector::new(0.5, 0.0), max: Vector::new(1.0, 0.5) };
         for seed in fill(&block, 0.0125) {
             let spin = 4.0 * (seed.position - Vector::new(0.75, 0.25)).perp();
-            particles.push(NewParticle {
-                position: seed.position,
-                velocity: Vector::new(3.0, 0.0) + spin,
-                volume: seed.area,
-                density: 1600.0,
-                stress: SymTensor::ZERO,
-                state: sand.initial_state(),
-                material: 0,
-                body: 0,
-            });
+            let velocity = Vector::new(3.0, 0.0) + spin;
+            let state = sand.initial_state();
+            particles.push(NewParticle::unstressed(
+                seed.position,
+                velocity,
+                seed.area,
+                1600.0,
+                state,
+            ));
         }
         assert_eq!(particles.len(), 1600);
         let config = SolverConfig {

@@ -157,7 +157,7 @@ pub(crate) fn faster(a: (Real, usize), b: (Real, usize)) -> (Real, usize) {
 
 #[cfg(test)]
 mod tests {
-    use mpm_constitutive::{LinearElastic, SymTensor};
+    use mpm_constitutive::LinearElastic;
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
@@ -168,16 +168,14 @@ mod tests {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
         let mut particles = Particles::default();
         for x in [0.6, 1.4] {
-            particles.push(NewParticle {
-                position: Vector::new(x, 1.0),
-                velocity: Vector::ZERO,
-                volume: 0.125 * 0.125,
-                density: 1000.0,
-                stress: SymTensor::ZERO,
-                state: (),
-                material: 0,
-                body: 0,
-            });
+            let position = Vector::new(x, 1.0);
+            particles.push(NewParticle::unstressed(
+                position,
+                Vector::ZERO,
+                0.125 * 0.125,
+                1000.0,
+                (),
+            ));
         }
         let config = SolverConfig {
             gravity: Vector::ZERO,
