@@ -1,6 +1,6 @@
 //! Runs a fixed number of MUSL steps of an elastic block for profilers (callgrind, perf), which need
 //! a plain binary rather than criterion's harness: `cargo build --release -p mpm-benches --example
-//! profile_step`, then `valgrind --tool=callgrind target/release/examples/profile_step 20000 20`.
+//! profile_step`, then `valgrind --tool=callgrind target/release/examples/profile_step 20000 20 [WARMUP]`.
 
 use mpm_constitutive::LinearElastic;
 
@@ -9,7 +9,12 @@ fn main() {
     let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20_000);
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20);
     let material = LinearElastic::from_young_poisson(2e6, 0.3).expect("valid elasticity");
+    let warmup: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(0);
     let mut solver = mpm_benches::square_on_floor(n, material);
+    // Steps before the timed ones: the block settles and particles begin to cross cells.
+    for _ in 0..warmup {
+        solver.step().expect("a stable step");
+    }
     let start = std::time::Instant::now();
     for _ in 0..steps {
         solver.step().expect("a stable step");

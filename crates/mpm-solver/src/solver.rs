@@ -126,6 +126,17 @@ impl Mirror {
     }
 }
 
+/// What the last step's final particle loop left for the next `locate` (see
+/// [`Scratch::stencils_ahead`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ahead {
+    /// some particle's node ids differ from the ones the active set was built from.
+    pub(crate) changed: bool,
+    /// `node_index` holds every particle's new nodes in the current active set: no new node id
+    /// is missing from it (the set may still have to shrink).
+    pub(crate) numbered: bool,
+}
+
 /// Per-step memory, reused between steps (no allocation once the material stops growing).
 #[derive(Debug)]
 pub(crate) struct Scratch<const N: usize> {
@@ -157,10 +168,10 @@ pub(crate) struct Scratch<const N: usize> {
     /// The arrays below `node_ids` describe the current `node_ids` (false before the first
     /// locate and after a failed one).
     pub(crate) located: bool,
-    /// `Some(changed)` when the last step's final particle loop already put every particle's
-    /// stencil at its current position into `node_ids`, `weights` and `gradients` (`changed`: some
-    /// node id differs from the numbered set); `None` makes `locate` compute them.
-    pub(crate) stencils_ahead: Option<bool>,
+    /// `Some` when the last step's final particle loop already put every particle's stencil at
+    /// its current position into `node_ids`, `weights` and `gradients`; `None` makes `locate`
+    /// compute them.
+    pub(crate) stencils_ahead: Option<Ahead>,
     /// x_i of the active nodes (APIC only; empty under FLIP).
     pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -170,6 +181,9 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) held: Vec<(u32, Vector)>,
     /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
     pub(crate) corrections: Vec<(u32, Vector)>,
+    /// How often `locate` kept everything, kept the active set, rebuilt it (tests only).
+    #[cfg(test)]
+    pub(crate) paths: [usize; 3],
 }
 
 impl<const N: usize> Scratch<N> {
@@ -193,6 +207,8 @@ impl<const N: usize> Scratch<N> {
             saved: Vec::new(),
             held: Vec::new(),
             corrections: Vec::new(),
+            #[cfg(test)]
+            paths: [0; 3],
         }
     }
 

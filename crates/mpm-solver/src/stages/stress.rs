@@ -17,7 +17,7 @@ use crate::config::{Scheme, Transfer};
 use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
-use crate::solver::Solver;
+use crate::solver::{Ahead, Solver};
 use crate::stages::locate::store;
 use crate::stages::timestep::{SLOWEST, faster, particle_signal};
 
@@ -30,13 +30,23 @@ struct ChunkTally {
     signal: (Real, usize),
     /// some particle's next stencil has other nodes than its last one
     changed: bool,
+    /// some particle's next stencil has a node outside the active set
+    missing: bool,
     /// some particle has left the grid
     outside: bool,
 }
 
 impl Default for ChunkTally {
     fn default() -> Self {
-        Self { dissipation: 0.0, cone: 0, apex: 0, signal: SLOWEST, changed: false, outside: false }
+        Self {
+            dissipation: 0.0,
+            cone: 0,
+            apex: 0,
+            signal: SLOWEST,
+            changed: false,
+            missing: false,
+            outside: false,
+        }
     }
 }
 
@@ -63,7 +73,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             sc.located = false;
         }
         let nodal = &sc.velocity;
-        let idx = &sc.node_index;
+        let active = &sc.active;
         let materials = &self.materials;
         let objective = self.config.objective_stress;
         let step = self.step + 1;
@@ -83,10 +93,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 .zip(p.state.par_chunks_mut(chunk))
                 .zip(p.volume.par_chunks_mut(chunk))
                 .zip(sc.node_ids.par_chunks_mut(chunk))
+                .zip(sc.node_index.par_chunks_mut(chunk))
                 .zip(sc.weights.par_chunks_mut(chunk))
                 .zip(sc.gradients.par_chunks_mut(chunk))
                 .enumerate()
-                .map(|(c, (((((stress, state), volume), ids), weights), grads))| {
+                .map(|(c, ((((((stress, state), volume), ids), idx), weights), grads))| {
                     let mut tally = ChunkTally::default();
                     for j in 0..stress.len() {
                         let q = c * chunk + j;
@@ -95,7 +106,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         } else {
                             let mut l = Matrix::ZERO;
                             for k in 0..N {
-                                let v = nodal[idx[q][k] as usize];
+                                let v = nodal[idx[j][k] as usize];
                                 let g: Vector = grads[j][k];
                                 l += Matrix::from_cols(v * g.x, v * g.y);
                             }
@@ -105,8 +116,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             // the next step's stencil, at the final position (`locate.rs`).
                             match shape.stencil(position[q]) {
                                 Ok(s) => {
-                                    tally.changed |=
-                                        store(s, &mut ids[j], &mut weights[j], &mut grads[j]);
+                                    if store(s, &mut ids[j], &mut weights[j], &mut grads[j]) {
+                                        // its dense indices in the current active set, which
+                                        // `locate` keeps unless some node joins or leaves it.
+                                        tally.changed = true;
+                                        idx[j] = active.indices_of(&ids[j]);
+                                        tally.missing |= idx[j].contains(&u32::MAX);
+                                    }
                                 }
                                 // `locate` repeats the search and names the particle.
                                 Err(_) => tally.outside = true,
@@ -173,7 +189,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 .collect();
 
         let (mut cone, mut apex, mut signal) = (0, 0, SLOWEST);
-        let (mut changed, mut outside) = (false, false);
+        let (mut changed, mut missing, mut outside) = (false, false, false);
         for r in results {
             let t = r?;
             self.dissipation.plastic += t.dissipation;
@@ -181,6 +197,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             apex += t.apex;
             signal = faster(signal, t.signal);
             changed |= t.changed;
+            missing |= t.missing;
             outside |= t.outside;
         }
         if last {
@@ -189,7 +206,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // With changed node ids the numbering below `node_ids` is stale until `locate`
                 // rebuilds it, whatever happens to `stencils_ahead` in between.
                 self.scratch.located = !changed;
-                self.scratch.stencils_ahead = Some(changed);
+                self.scratch.stencils_ahead = Some(Ahead { changed, numbered: !missing });
             }
         }
         Ok((cone, apex))
