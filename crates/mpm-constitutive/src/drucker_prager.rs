@@ -368,6 +368,8 @@ impl DruckerPrager {
     }
 
     #[inline(always)]
+    // x − x is the point: 0 for finite x, NaN otherwise.
+    #[allow(clippy::eq_op)]
     fn check_inputs(
         &self,
         sigma: &SymTensor,
