@@ -8,7 +8,7 @@
 //! stress magnitude unchanged under rigid rotation. Then the constitutive update (eqs 10–11 or
 //! 23–25) and the volume V_p ← V_p (1 + tr Δε) (eq 12, ρ ← ρ / (1 + tr Δε)).
 
-use glam::DMat3;
+use glam::{DMat3, DVec3};
 use mpm_constitutive::{ConstitutiveModel, Surface, SymTensor};
 use mpm_grid::ShapeFunctions;
 use rayon::prelude::*;
@@ -135,8 +135,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         if objective {
                             let theta = 0.5 * dt * (lyx - lxy);
                             if theta != 0.0 {
-                                let r = DMat3::from_rotation_z(theta);
-                                stress[j] = stress[j].rotated(&r);
+                                let (cos, sin) = cos_sin(theta);
+                                stress[j] = stress[j].rotated_z(cos, sin);
+                                let r = DMat3::from_cols(
+                                    DVec3::new(cos, sin, 0.0),
+                                    DVec3::new(-sin, cos, 0.0),
+                                    DVec3::Z,
+                                );
                                 model.rotate_state(&mut state[j], &r);
                             }
                         }
@@ -213,6 +218,24 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
+/// (cos θ, sin θ) of an incremental rotation angle. The angles of a step are small (Δt times a
+/// spin rate): below 2⁻⁵ the Taylor series to θ⁸ (cos) and θ⁷ (sin) leave a remainder below
+/// 2⁻⁵⁸ of the result, as accurate as the library's `sin_cos` (tested) at a fraction of its
+/// cost (6 % of the flume's run).
+#[inline(always)]
+fn cos_sin(theta: Real) -> (Real, Real) {
+    if theta.abs() < 0.031_25 {
+        let t2 = theta * theta;
+        let sin = theta * (1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0))));
+        let cos =
+            1.0 + t2 * (-0.5 + t2 * (1.0 / 24.0 + t2 * (-1.0 / 720.0 + t2 * (1.0 / 40320.0))));
+        (cos, sin)
+    } else {
+        let (sin, cos) = theta.sin_cos();
+        (cos, sin)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use mpm_constitutive::{LinearElastic, SymTensor};
@@ -257,6 +280,24 @@ mod tests {
             s.update_stress(dt, false).unwrap();
         }
         (sigma0, s.particles.stress[0])
+    }
+
+    /// The series agrees with the library to 2 ulp over its range (both are within about 1 ulp
+    /// of the exact values), and is exact where it must be (θ = 0).
+    #[test]
+    fn small_angle_cos_sin_matches_the_library() {
+        let ulp = |x: f64| f64::EPSILON * x.abs().max(f64::MIN_POSITIVE);
+        let mut theta = 1e-300;
+        while theta < 0.05 {
+            for t in [theta, -theta] {
+                let (c, s) = super::cos_sin(t);
+                let (s0, c0) = t.sin_cos();
+                assert!((c - c0).abs() <= 2.0 * ulp(c0), "cos({t}) = {c} against {c0}");
+                assert!((s - s0).abs() <= 2.0 * ulp(s0), "sin({t}) = {s} against {s0}");
+            }
+            theta *= 1.01;
+        }
+        assert_eq!(super::cos_sin(0.0), (1.0, 0.0));
     }
 
     /// The identity USL + APIC relies on: after G2P, C_p equals the velocity gradient the stress
