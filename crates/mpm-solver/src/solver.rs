@@ -166,7 +166,7 @@ pub(crate) struct Scratch<const N: usize> {
     /// Nodes on a declared boundary.
     pub(crate) boundary: Vec<BoundaryNode>,
     /// The arrays below `node_ids` describe the current `node_ids` (false before the first
-    /// locate and after a failed one).
+    /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
     /// `Some` when the last step's final particle loop already put every particle's stencil at
     /// its current position into `node_ids`, `weights` and `gradients`; `None` makes `locate`

@@ -34,7 +34,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let positions = &self.particles.position;
         let (changed, numbered) = match sc.stencils_ahead.take() {
             // The last step's final particle loop computed them (`stress.rs`).
-            Some(ahead) => (ahead.changed, ahead.numbered),
+            Some(ahead) => (ahead.changed, Some(ahead.numbered)),
             None => {
                 // Fixed chunks, each run in particle order: the first chunk that fails reports
                 // its first failing particle, so the error names the same particle for any
@@ -58,7 +58,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     })
                     .try_reduce(|| false, |a, b| Ok(a | b));
                 match failure {
-                    Ok(changed) => (changed, false),
+                    Ok(changed) => (changed, None),
                     Err((particle, cause)) => {
                         // `try_reduce` may meet any failing chunk first: name the lowest failing
                         // particle, whatever the thread count.
@@ -90,8 +90,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // hence its numbering, the boundary nodes and the nodal arrays then stay, and only the
         // particles' dense indices and the node lists are redone. Whether the set stayed is read
         // off the work itself: no stencil node is missing from it, and no node's list is empty.
-        // (The final particle loop of the last step may have numbered the new nodes already.)
-        if (numbered || number_stencils(sc, chunk)) && build_lists(sc) {
+        // The final particle loop of the last step numbered the new nodes already (`Some(true)`)
+        // or met a node outside the set (`Some(false)`: a rebuild is certain).
+        let same = match numbered {
+            Some(true) => build_lists(sc),
+            Some(false) => false,
+            None => number_stencils(sc, chunk) && build_lists(sc),
+        };
+        if same {
             #[cfg(test)]
             {
                 sc.paths[1] += 1;
@@ -228,7 +234,7 @@ fn build_lists<const N: usize>(sc: &mut Scratch<N>) -> bool {
 }
 
 /// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
-/// held (the active-node numbering must then be rebuilt). Used by `locate` and, for the stencils
+/// held (their dense indices and the node lists must then be redone). Used by `locate` and, for the stencils
 /// computed ahead, by the stress update.
 #[inline(always)]
 pub(crate) fn store<const N: usize>(

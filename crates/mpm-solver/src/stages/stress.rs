@@ -81,6 +81,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (position, material) = (&p.position, &p.material);
         let (mass, velocity) = (&p.mass, &p.velocity);
         let chunk = chunk_len(p.len());
+        // Zipped below: a shorter array would silently drop particles.
+        debug_assert!(sc.node_index.len() == p.len() && sc.gradients.len() == p.len());
         // USL with APIC: G2P has just stored C_p = Σ_i v_i^L ⊗ G_ip, the very sum (same terms, same
         // order) this update needs, since USL strains with v^L; reading it spares the gather.
         let from_affine =
@@ -208,8 +210,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if last {
             self.next_signal = Some(signal);
             if !outside {
-                // With changed node ids the numbering below `node_ids` is stale until `locate`
-                // rebuilds it, whatever happens to `stencils_ahead` in between.
+                // With changed node ids the node lists (and, where a node was missing, the
+                // active set) are stale until `locate` redoes them, whatever happens to
+                // `stencils_ahead` in between.
                 self.scratch.located = !changed;
                 self.scratch.stencils_ahead = Some(Ahead { changed, numbered: !missing });
             }
@@ -286,7 +289,8 @@ mod tests {
     /// of the exact values), and is exact where it must be (θ = 0).
     #[test]
     fn small_angle_cos_sin_matches_the_library() {
-        let ulp = |x: f64| f64::EPSILON * x.abs().max(f64::MIN_POSITIVE);
+        // the gap to the next larger magnitude: one unit in the last place of x
+        let ulp = |x: f64| f64::from_bits(x.abs().to_bits() + 1) - x.abs();
         let mut theta = 1e-300;
         while theta < 0.05 {
             for t in [theta, -theta] {
