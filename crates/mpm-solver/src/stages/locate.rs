@@ -234,8 +234,8 @@ fn build_lists<const N: usize>(sc: &mut Scratch<N>) -> bool {
 }
 
 /// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
-/// held (their dense indices and the node lists must then be redone). Used by `locate` and, for the stencils
-/// computed ahead, by the stress update.
+/// held (their dense indices and the node lists must then be redone). Used by `locate` and, for
+/// the stencils computed ahead, by the stress update.
 #[inline(always)]
 pub(crate) fn store<const N: usize>(
     s: Stencil<N>,
