@@ -38,7 +38,7 @@ fn corner_nodes(i: i32, j: i32) -> [NodeId; 4] {
 }
 
 impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
-    #[inline]
+    #[inline(always)]
     fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
         let g = &self.0;
         let loc = g.locate_parts(x)?;
@@ -64,7 +64,7 @@ impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
 }
 
 impl ShapeFunctions<4> for Bilinear<RegularGrid> {
-    #[inline]
+    #[inline(always)]
     fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
         let g = &self.0;
         let (i, j, a, b) = g.cell_of_units(g.units_of(x)?);

@@ -59,7 +59,7 @@ fn bspline_axis(u: f64) -> (i32, [(f64, f64); 3]) {
 }
 
 impl ShapeFunctions<9> for QuadraticBSpline {
-    #[inline]
+    #[inline(always)]
     fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
         let u = self.grid.units_of(x)?;
         let (cx, wx) = bspline_axis(u.x);

@@ -152,7 +152,7 @@ pub(crate) fn tensor3(
 }
 
 impl ShapeFunctions<9> for Gimp {
-    #[inline]
+    #[inline(always)]
     fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
         let u = self.grid.units_of(x)?;
         let (cx, wx) = gimp_axis(u.x, &self.axes[0]);
