@@ -105,6 +105,7 @@ fn variant(e: &RowError) -> &'static str {
         SolverError::NonFinite { .. } => "NonFinite",
         SolverError::Inverted { .. } => "Inverted",
         SolverError::CourantExceeded { .. } => "CourantExceeded",
+        SolverError::StepTooLong { .. } => "StepTooLong",
         SolverError::Constitutive { .. } => "Constitutive",
     }
 }

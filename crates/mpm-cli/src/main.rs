@@ -1,8 +1,11 @@
 //! `mpm`: the command line (clap only; the work is in the `mpm_cli` library).
 //!
-//! Exit codes: 0 success; 1 I/O or other failure; 2 invalid scene or arguments; 3 the solver
-//! stopped with an instability (files up to the failure are written); 130 interrupted (a
-//! checkpoint was written; continue with `mpm resume DIR`).
+//! Exit codes: 0 success; 1 I/O or other failure (or the output directory is in use); 2 invalid
+//! scene, arguments or checkpoint; 3 the solver stopped with an instability (files up to the
+//! failure are written); 4 energy alarm (the run ended, or stopped when asked to, with an energy
+//! residual above `[solver] energy_alarm`: results suspect); 5 step limit (`[solver] max_steps`);
+//! 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (a checkpoint was written; continue with
+//! `mpm resume DIR`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -128,6 +131,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Run { scene, out, threads, quiet, force } => {
+            let signals = signals();
             let name = scene.unwrap_or_else(|| DEFAULT_SCENE.to_string());
             let scene = match load(&name) {
                 Ok(s) => s,
@@ -140,7 +144,7 @@ fn main() -> ExitCode {
                 quiet,
                 force,
                 stop_after: None,
-                interrupt: Some(ctrl_c_flag()),
+                interrupt: Some(signals.interrupt.clone()),
             };
             if !quiet {
                 eprintln!(
@@ -151,18 +155,19 @@ fn main() -> ExitCode {
                     out.display()
                 );
             }
-            finish(mpm_cli::run_scene(&scene, &opts), &out, quiet)
+            finish(mpm_cli::run_scene(&scene, &opts), &out, quiet, &signals)
         }
         Command::Resume { dir, threads, quiet } => {
+            let signals = signals();
             let opts = RunOptions {
                 out_dir: Some(dir.clone()),
                 threads,
                 quiet,
                 force: false,
                 stop_after: None,
-                interrupt: Some(ctrl_c_flag()),
+                interrupt: Some(signals.interrupt.clone()),
             };
-            finish(mpm_cli::resume(&dir, &opts), &dir, quiet)
+            finish(mpm_cli::resume(&dir, &opts), &dir, quiet, &signals)
         }
         Command::Check { scene } => {
             let scene = match load(&scene) {
@@ -312,22 +317,35 @@ fn stem(name: &str) -> String {
     Path::new(name).file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned())
 }
 
-/// A flag set by Ctrl-C (a second Ctrl-C exits at once).
-fn ctrl_c_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let f = flag.clone();
-    let installed = ctrlc::set_handler(move || {
-        if f.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
+/// Flags set by SIGINT (Ctrl-C) and SIGTERM (what batch schedulers send before killing a job).
+struct Signals {
+    /// either signal: the run stops after the current step and writes a checkpoint.
+    interrupt: Arc<AtomicBool>,
+    /// SIGTERM: the exit code is 143 instead of 130.
+    terminated: Arc<AtomicBool>,
+}
+
+/// installs the handlers: the first SIGINT or SIGTERM sets the flags, a second one exits at
+/// once (130 or 143) without waiting for the step.
+fn signals() -> Signals {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use signal_hook::flag::{register, register_conditional_shutdown};
+    let s = Signals {
+        interrupt: Arc::new(AtomicBool::new(false)),
+        terminated: Arc::new(AtomicBool::new(false)),
+    };
+    for (signal, name, code) in [(SIGINT, "SIGINT", 130), (SIGTERM, "SIGTERM", 143)] {
+        // The shutdown is registered first, so it sees the flag as the previous signal left it.
+        let installed = register_conditional_shutdown(signal, code, s.interrupt.clone())
+            .and_then(|_| register(signal, s.interrupt.clone()));
+        if let Err(e) = installed {
+            eprintln!("mpm: warning: {name} will not checkpoint ({e})");
         }
-        eprintln!(
-            "\nmpm: interrupted; writing a checkpoint after this step (Ctrl-C again to abort)"
-        );
-    });
-    if let Err(e) = installed {
-        eprintln!("mpm: warning: Ctrl-C will not checkpoint ({e})");
     }
-    flag
+    if let Err(e) = register(SIGTERM, s.terminated.clone()) {
+        eprintln!("mpm: warning: SIGTERM will exit with 130 instead of 143 ({e})");
+    }
+    s
 }
 
 fn scene_failure(e: &SceneError) -> ExitCode {
@@ -338,7 +356,7 @@ fn scene_failure(e: &SceneError) -> ExitCode {
 fn run_failure(e: &RunError) -> ExitCode {
     eprintln!("error: {e}");
     match e {
-        RunError::Scene(_) => ExitCode::from(2),
+        RunError::Scene(_) | RunError::Checkpoint { .. } => ExitCode::from(2),
         RunError::Solver { .. } => ExitCode::from(3),
         _ => ExitCode::from(1),
     }
@@ -360,18 +378,29 @@ fn print_summary(s: &RunSummary, out: &Path) {
     );
     eprintln!(
         "mpm: front x = {:.3} m (travel {:.3} m), tail x = {:.3} m, max thickness {:.3} m, \
-         centre of mass travel {:.3} m; energy residual {:.3e} J/m",
+         centre of mass travel {:.3} m; energy residual {:.3e} J/m ({:+.2} % of the energy \
+         scale, worst {:+.2} %)",
         s.runout.front_x,
         s.runout.front_travel,
         s.runout.tail_x,
         s.runout.max_thickness,
         s.runout.com_travel,
-        s.energy.residual
+        s.energy.residual,
+        100.0 * s.energy_check.relative_residual,
+        100.0 * s.energy_check.worst_relative_residual
     );
+    if let Some(e) = &s.error {
+        eprintln!("mpm: {e}");
+    }
     eprintln!("mpm: output in {}", out.display());
 }
 
-fn finish(result: Result<RunSummary, RunError>, out: &Path, quiet: bool) -> ExitCode {
+fn finish(
+    result: Result<RunSummary, RunError>,
+    out: &Path,
+    quiet: bool,
+    signals: &Signals,
+) -> ExitCode {
     match result {
         Ok(s) => {
             if !quiet {
@@ -383,10 +412,14 @@ fn finish(result: Result<RunSummary, RunError>, out: &Path, quiet: bool) -> Exit
                     s.simulated_time,
                     out.display()
                 );
-                ExitCode::from(130)
-            } else {
-                ExitCode::SUCCESS
+                if signals.terminated.load(Ordering::SeqCst) {
+                    return ExitCode::from(143);
+                }
+            } else if s.status != RunStatus::Completed && quiet {
+                // The status is the answer: say it even when quiet.
+                eprintln!("mpm: {:?}: {}", s.status, s.error.as_deref().unwrap_or(""));
             }
+            ExitCode::from(s.status.exit_code())
         }
         Err(e) => {
             if let RunError::Solver { summary, .. } = &e {

@@ -47,7 +47,10 @@ impl Progress {
                     *last = Instant::now();
                     let rate = (steps - *steps0) as f64 / start.elapsed().as_secs_f64().max(1e-9);
                     bar.set_position((time * TICKS_PER_S) as u64);
-                    bar.set_message(format!("t = {time:.3} s, step {steps}, {rate:.0} steps/s"));
+                    bar.set_message(format!(
+                        "t = {} s, step {steps}, {rate:.0} steps/s",
+                        seconds(time)
+                    ));
                 }
             }
             Progress::Plain { last, start, steps0, end } => {
@@ -56,7 +59,9 @@ impl Progress {
                     let elapsed = start.elapsed().as_secs_f64();
                     let rate = (steps - *steps0) as f64 / elapsed.max(1e-9);
                     eprintln!(
-                        "mpm: t = {time:.4} s of {end} s ({:.0} %), step {steps}, {rate:.0} steps/s",
+                        "mpm: t = {} s of {} s ({:.0} %), step {steps}, {rate:.0} steps/s",
+                        seconds(time),
+                        seconds(*end),
                         100.0 * time / *end
                     );
                 }
@@ -64,9 +69,35 @@ impl Progress {
         }
     }
 
+    /// prints a warning line (above the bar on a terminal); nothing when quiet.
+    pub(crate) fn warn(&self, message: &str) {
+        match self {
+            Progress::Quiet => {}
+            Progress::Bar { bar, .. } => bar.println(format!("mpm: warning: {message}")),
+            Progress::Plain { .. } => eprintln!("mpm: warning: {message}"),
+        }
+    }
+
     pub(crate) fn finish(&mut self) {
         if let Progress::Bar { bar, .. } = self {
             bar.finish_and_clear();
         }
+    }
+}
+
+/// a time in seconds for a progress line: 4 decimals in the usual range, else scientific (an
+/// end time of 1e-300 s must not print 300 zeros).
+pub(crate) fn seconds(t: f64) -> String {
+    if t == 0.0 || (1e-3..1e7).contains(&t.abs()) { format!("{t:.4}") } else { format!("{t:.4e}") }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn times_print_compactly_at_any_magnitude() {
+        assert_eq!(super::seconds(1.25), "1.2500");
+        assert_eq!(super::seconds(0.0), "0.0000");
+        assert_eq!(super::seconds(1e-300), "1.0000e-300");
+        assert_eq!(super::seconds(3e9), "3.0000e9");
     }
 }

@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use mpm_grid::ShapeFunctions;
-use mpm_solver::{Observer, RunEnd, Solver, StepReport, Vector};
+use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::{self, CheckpointFile};
@@ -24,8 +24,8 @@ use crate::output::csv::{self, EnergyRow, ProbeRow};
 use crate::output::plots::{self, Chart, Series, Style};
 use crate::output::{atomic, vtk};
 use crate::progress::Progress;
-use crate::summary::{self, DtStats, RunStatus, RunSummary, RunoutMetrics};
-use crate::validate::{GridBuilt, Scene, load_scene_str};
+use crate::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
+use crate::validate::{GridBuilt, Scene, ground_height, load_scene_str};
 
 /// How to run a scene.
 #[derive(Clone, Debug, Default)]
@@ -67,6 +67,12 @@ pub(crate) struct History {
     #[serde(default)]
     output_time: f64,
     initial: Option<RunoutMetrics>,
+    /// the energy residual against its scale, from the first series row on.
+    #[serde(default)]
+    energy_check: Option<EnergyCheck>,
+    /// when the energy alarm first tripped (s).
+    #[serde(default)]
+    alarm_time: Option<f64>,
 }
 
 /// What `mpm check` reports.
@@ -285,10 +291,13 @@ impl Job for RunJob<'_> {
             interrupt: self.opts.interrupt.clone(),
             stop_after: self.opts.stop_after,
             io_error: None,
+            stop: None,
         };
         if fresh {
             let m0 = driver.metrics(&solver);
             driver.history.initial = Some(m0);
+            driver.history.energy_check =
+                Some(EnergyCheck::new(&solver.energy(), driver.height_energy(&solver)));
             driver.record_series(&solver);
             driver.write_frame(&solver)?;
             driver.flush_series()?;
@@ -306,10 +315,24 @@ impl Job for RunJob<'_> {
         if let Some(e) = driver.io_error.take() {
             return Err(e);
         }
-        let (status, error) = match &result {
-            Ok(RunEnd::EndTime) => (RunStatus::Completed, None),
-            Ok(RunEnd::Stopped) => (RunStatus::Interrupted, None),
-            Err(e) => (RunStatus::Failed, Some(e.to_string())),
+        let alarm = alarm_message(&driver.history, r.alarm.threshold);
+        let (status, error) = match (&result, driver.stop) {
+            (Err(e), _) => (RunStatus::Failed, Some(e.to_string())),
+            (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
+                RunStatus::StepLimit,
+                Some(format!(
+                    "step limit: {} steps reached at t = {:.6e} s before end_time = {} s; raise \
+                     `[solver] max_steps` if the run is sound (Δt {:.3e} s)",
+                    solver.step_count(),
+                    solver.time(),
+                    r.end_time,
+                    solver.last_report().dt
+                )),
+            ),
+            (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => (RunStatus::EnergyAlarm, alarm),
+            (Ok(RunEnd::Stopped), None) => (RunStatus::Interrupted, None),
+            (Ok(RunEnd::EndTime), _) if alarm.is_some() => (RunStatus::EnergyAlarm, alarm),
+            (Ok(RunEnd::EndTime), _) => (RunStatus::Completed, None),
         };
         // The checkpoint holds the history as an uninterrupted run has it at this step (the
         // extra row and frame of the stop below are not part of it).
@@ -324,6 +347,13 @@ impl Job for RunJob<'_> {
         if driver.history.frames.last().is_none_or(|f| f.0 < t) {
             driver.write_frame(&solver)?;
         }
+        // The final row may trip the alarm: a run is judged on its last state too.
+        let (status, error) = match status {
+            RunStatus::Completed if driver.history.alarm_time.is_some() => {
+                (RunStatus::EnergyAlarm, alarm_message(&driver.history, r.alarm.threshold))
+            }
+            _ => (status, error),
+        };
         driver.flush_series()?;
         let summary = driver.summary(&solver, status, error, self.threads);
         if let Some(dir) = driver.dir {
@@ -339,6 +369,20 @@ impl Job for RunJob<'_> {
     }
 }
 
+/// the summary's message for a tripped energy alarm (`None` if it did not trip).
+fn alarm_message(h: &History, threshold: f64) -> Option<String> {
+    let t = h.alarm_time?;
+    let worst = h.energy_check.unwrap_or_default();
+    Some(format!(
+        "energy alarm: at t = {t:.4} s the energy residual exceeded {:.1} % of the run's energy \
+         scale (`[solver] energy_alarm`); the worst was {:+.1} % at t = {:.4} s. The results are \
+         suspect: check the time step, the material's stiffness and the contact settings",
+        100.0 * threshold,
+        100.0 * worst.worst,
+        worst.worst_time
+    ))
+}
+
 struct Driver<'a> {
     scene: &'a Scene,
     dir: Option<&'a Path>,
@@ -348,6 +392,17 @@ struct Driver<'a> {
     interrupt: Option<Arc<AtomicBool>>,
     stop_after: Option<f64>,
     io_error: Option<RunError>,
+    /// why the driver stopped the run, when not on request.
+    stop: Option<Stop>,
+}
+
+/// Why the driver stopped a run before its end time (other than an interrupt).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stop {
+    /// the energy alarm tripped with `energy_alarm_stop = true`.
+    EnergyAlarm,
+    /// `max_steps` was reached.
+    StepLimit,
 }
 
 /// Rows of each series this session has on disk.
@@ -389,17 +444,48 @@ impl Driver<'_> {
         )
     }
 
+    /// Σ_p m_p |g| h_p, h_p the height of particle p above the ground (the energy check's scale).
+    fn height_energy<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> f64 {
+        let r = &self.scene.r;
+        let p = solver.particles();
+        let g = r.config.gravity.length();
+        p.position
+            .iter()
+            .zip(&p.mass)
+            .map(|(x, m)| m * g * (x.y - ground_height(&r.ground, x.x)).max(0.0))
+            .sum()
+    }
+
     fn record_series<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         &mut self,
         solver: &Solver<M, S, N>,
     ) {
         let r = &self.scene.r;
         let t = solver.time();
+        let ledger = solver.energy();
+        if let Some(check) = &mut self.history.energy_check {
+            let relative = check.observe(t, &ledger);
+            if self.history.alarm_time.is_none() && relative.abs() > r.alarm.threshold {
+                self.history.alarm_time = Some(t);
+                self.progress.warn(&format!(
+                    "energy alarm at t = {t:.4} s: |energy residual| is {:.1} % of the energy \
+                     scale (threshold {:.1} %)",
+                    100.0 * relative.abs(),
+                    100.0 * r.alarm.threshold
+                ));
+                if r.alarm.stop {
+                    self.stop = Some(Stop::EnergyAlarm);
+                }
+            }
+        }
         self.history.energy.push(EnergyRow {
             time: t,
             step: solver.step_count(),
             dt: solver.last_report().dt,
-            ledger: solver.energy(),
+            ledger,
         });
         let p = solver.particles();
         let direction = r.output.reference.map_or(Vector::X, |rf| rf.direction);
@@ -549,6 +635,16 @@ impl Driver<'_> {
             output_time_s: h.output_time,
             threads,
             energy: solver.energy(),
+            energy_check: {
+                let mut c = h.energy_check.unwrap_or_default();
+                EnergyReport {
+                    relative_residual: c.observe(solver.time(), &solver.energy()),
+                    worst_relative_residual: c.worst,
+                    worst_time: c.worst_time,
+                    alarm_threshold: r.alarm.threshold,
+                    alarm_time: h.alarm_time,
+                }
+            },
             runout: h.runout.last().copied().unwrap_or_default(),
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
         }
@@ -756,8 +852,15 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
             }
         }
         self.progress.update(t, report.step);
+        if report.step >= r.max_steps && t < r.end_time * (1.0 - 1e-12) {
+            self.stop = Some(Stop::StepLimit);
+        }
         let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
-        if interrupted || self.stop_after.is_some_and(|s| t >= s) {
+        if interrupted {
+            self.progress
+                .warn("interrupted: writing a checkpoint after this step (a second signal aborts)");
+        }
+        if self.stop.is_some() || interrupted || self.stop_after.is_some_and(|s| t >= s) {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())

@@ -382,6 +382,18 @@ pub struct SolverSpec {
     /// or `"node"` (the paper's: always).
     #[serde(default)]
     pub contact: Option<Contact>,
+    /// energy alarm: largest admissible |energy residual| as a fraction of the run's energy scale
+    /// (`mpm_solver::EnergyCheck`), default 0.2.
+    #[serde(default)]
+    pub energy_alarm: Option<f64>,
+    /// stop the run when the energy alarm trips (default false: run on, end with status
+    /// `energy_alarm`).
+    #[serde(default)]
+    pub energy_alarm_stop: Option<bool>,
+    /// most steps a run may take (default 100 000 000): `mpm check` and `mpm run` refuse a scene
+    /// whose initial Δt needs more, and a run that reaches it stops with status `step_limit`.
+    #[serde(default)]
+    pub max_steps: Option<i64>,
 }
 
 /// A point-data field of the VTK output.

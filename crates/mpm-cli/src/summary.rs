@@ -18,6 +18,42 @@ pub enum RunStatus {
     Interrupted,
     /// the solver stopped with an instability (see `error`).
     Failed,
+    /// the energy residual exceeded `[solver] energy_alarm` of the run's energy scale (see
+    /// `energy_check`): the run went on to its end time, or stopped there with
+    /// `energy_alarm_stop = true`. Its results are suspect.
+    EnergyAlarm,
+    /// the run reached `[solver] max_steps` before its end time.
+    StepLimit,
+}
+
+impl RunStatus {
+    /// the process exit code `mpm` ends with (README's table): 0 completed, 3 failed,
+    /// 4 energy alarm, 5 step limit, 130 interrupted (143 when by SIGTERM, which the front end
+    /// knows).
+    pub fn exit_code(self) -> u8 {
+        match self {
+            RunStatus::Completed => 0,
+            RunStatus::Failed => 3,
+            RunStatus::EnergyAlarm => 4,
+            RunStatus::StepLimit => 5,
+            RunStatus::Interrupted => 130,
+        }
+    }
+}
+
+/// The run's energy error against its scale (`mpm_solver::EnergyCheck`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct EnergyReport {
+    /// residual / scale at the end (negative: energy lost without being booked).
+    pub relative_residual: f64,
+    /// the residual / scale of largest magnitude over the run (sampled at every series row).
+    pub worst_relative_residual: f64,
+    /// when it was reached (s).
+    pub worst_time: f64,
+    /// the alarm threshold (`[solver] energy_alarm`).
+    pub alarm_threshold: f64,
+    /// when |residual| / scale first exceeded the threshold (s); `None` if it never did.
+    pub alarm_time: Option<f64>,
 }
 
 /// Statistics of the time steps taken (s).
@@ -101,6 +137,9 @@ pub struct RunSummary {
     pub threads: usize,
     /// the energy ledger at the end (J per metre of thickness).
     pub energy: EnergyLedger,
+    /// the energy residual against the run's energy scale, and the alarm.
+    #[serde(default)]
+    pub energy_check: EnergyReport,
     /// runout metrics at the end.
     pub runout: RunoutMetrics,
     /// FNV-1a 64 hash (hex) of the final solver state's bytes (particles, clock, dissipation):

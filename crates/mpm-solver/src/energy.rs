@@ -63,3 +63,89 @@ pub struct Dissipation {
     /// External work of time-varying loads over all steps (not a dissipation: an input).
     pub external: Real,
 }
+
+/// The size of a run's energy error, judged against the energy the run can move around.
+///
+/// The ledger's residual alone has no scale: the potential energy's zero is arbitrary. It is
+/// judged against
+/// `scale(t) = KE₀ + U₀ + Σ_p m_p |g| h_p + released(t) + |W_ext(t)|`:
+/// the initial kinetic and strain energy, the potential energy of every particle above the
+/// ground below it at the start (h_p ≥ 0), the largest drop of potential energy below its initial
+/// value so far, and the external work. The relative residual `residual / scale` is 0 for a
+/// perfect integrator, positive when the integration creates energy and negative when it loses
+/// energy it does not book as dissipation (a body crushed into the floor, a collapse that a
+/// contact law absorbs without friction work).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct EnergyCheck {
+    /// KE₀ + U₀ + Σ m_p |g| h_p (J/m).
+    pub initial_scale: Real,
+    /// potential energy at the start (J/m).
+    pub initial_potential: Real,
+    /// largest drop of potential energy below its initial value so far (J/m).
+    pub released: Real,
+    /// the relative residual of largest magnitude seen so far (signed).
+    pub worst: Real,
+    /// when it was seen (s).
+    pub worst_time: Real,
+}
+
+impl EnergyCheck {
+    /// starts from the initial ledger and `height_energy` = Σ_p m_p |g| h_p with h_p the height
+    /// of particle p above the ground at the start.
+    pub fn new(initial: &EnergyLedger, height_energy: Real) -> Self {
+        Self {
+            initial_scale: initial.kinetic + initial.strain + height_energy.max(0.0),
+            initial_potential: initial.potential,
+            ..Self::default()
+        }
+    }
+
+    /// the scale of `e` (see the type's docs), after taking its potential energy into account.
+    fn scale(&mut self, e: &EnergyLedger) -> Real {
+        self.released = self.released.max(self.initial_potential - e.potential);
+        self.initial_scale + self.released + e.external_work.abs()
+    }
+
+    /// the relative residual of `e` at time `t`, remembered if it is the largest in magnitude so
+    /// far. A residual without any scale (nothing moves, nothing is stored) counts as 0; a
+    /// non-finite one as +∞.
+    pub fn observe(&mut self, t: Real, e: &EnergyLedger) -> Real {
+        let scale = self.scale(e);
+        let r = if !e.residual.is_finite() || !scale.is_finite() {
+            Real::INFINITY
+        } else if scale > 0.0 {
+            e.residual / scale
+        } else {
+            0.0
+        };
+        if r.abs() > self.worst.abs() || r.is_nan() {
+            self.worst = r;
+            self.worst_time = t;
+        }
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ledger(kinetic: Real, potential: Real, residual: Real) -> EnergyLedger {
+        EnergyLedger { kinetic, potential, residual, ..Default::default() }
+    }
+
+    #[test]
+    fn the_scale_grows_with_the_released_potential_and_keeps_the_worst_residual() {
+        // A body of m g h = 100 J/m above the ground, at rest.
+        let mut c = EnergyCheck::new(&ledger(0.0, 500.0, 0.0), 100.0);
+        assert_eq!(c.observe(0.0, &ledger(0.0, 500.0, 0.0)), 0.0);
+        // It falls 60 J/m and shows a residual of −16 J/m: −16 / (100 + 60).
+        assert_eq!(c.observe(1.0, &ledger(44.0, 440.0, -16.0)), -0.1);
+        // It rises again: the released energy keeps its largest value (60), so +8 J/m is 0.05.
+        assert_eq!(c.observe(2.0, &ledger(0.0, 470.0, 8.0)), 0.05);
+        assert_eq!((c.worst, c.worst_time), (-0.1, 1.0));
+        // A non-finite residual is the worst possible.
+        assert_eq!(c.observe(3.0, &ledger(0.0, 470.0, Real::NAN)), Real::INFINITY);
+        assert_eq!(c.worst, Real::INFINITY);
+    }
+}

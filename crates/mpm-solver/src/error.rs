@@ -107,6 +107,27 @@ pub enum SolverError {
         /// the fixed time step
         dt: f64,
     },
+    /// With a fixed time step, gravity and the fastest particle's speed would carry it more than
+    /// one cell in one step (nothing in eq 13 bounds that for a soft or stress-free material).
+    #[error(
+        "step {step}: particle {particle} at ({x}, {y}) would move {cells:.3} cells in one step \
+         (its speed and gravity): the fixed time step {dt:e} s is too large; use a \
+         Courant-controlled step or a smaller dt",
+        x = position.x,
+        y = position.y
+    )]
+    StepTooLong {
+        /// step at which it happened
+        step: u64,
+        /// the fastest particle
+        particle: usize,
+        /// its position
+        position: Vector,
+        /// (|v|_max Δt + ½ |g| Δt²) / L
+        cells: f64,
+        /// the fixed time step
+        dt: f64,
+    },
     /// The constitutive update refused its input.
     #[error("step {step}: particle {particle} at ({x}, {y}): {source}", x = position.x, y = position.y)]
     Constitutive {

@@ -55,8 +55,9 @@ pub mod solver;
 mod stages;
 
 pub use config::{Boundaries, Contact, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer};
-pub use energy::{Dissipation, EnergyLedger};
+pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
 pub use solver::{Checkpoint, Observer, RunEnd, Solver, StepReport};
+pub use stages::timestep::displacement_dt;

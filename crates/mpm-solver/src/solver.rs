@@ -27,6 +27,7 @@ use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
+use crate::stages::timestep::Fastest;
 
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -258,9 +259,13 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) scratch: Scratch<N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
-    /// The next step's fastest signal (max_p (c_p + |v_p|), particle) when the last step's final
-    /// particle loop computed it; `None` makes the time step compute it.
-    pub(crate) next_signal: Option<(Real, usize)>,
+    /// The next step's fastest signal (max_p (c_p + |v_p|)) and speed, with their particles,
+    /// when the last step's final particle loop computed them; `None` makes the time step
+    /// compute them.
+    pub(crate) next_signal: Option<Fastest>,
+    /// Σ m_i of the step's particle-to-grid transfer, kept when the end-of-step guard re-located
+    /// the particles (which renumbers the nodal arrays); `None` while they are the step's own.
+    pub(crate) grid_mass_kept: Option<Real>,
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -355,6 +360,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 apex_returns: 0,
             },
             next_signal: None,
+            grid_mass_kept: None,
         };
         // Every particle must be inside the grid before the first step; a failure here is
         // reported at the step already completed (0 for a new run).
@@ -433,7 +439,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// Σ_i m_i of the last particle-to-grid transfer: equals Σ_p m_p when the shape functions form
     /// a partition of unity (a check of mass conservation at the grid).
     pub fn grid_mass(&self) -> Real {
-        self.scratch.mass.iter().sum()
+        self.grid_mass_kept.unwrap_or_else(|| self.scratch.mass.iter().sum())
     }
 
     /// heap bytes held by particles and scratch memory.
@@ -489,6 +495,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             0.5 * par::sum(p.len(), |i| -p.mass[i] * dg.dot(p.position[i]))
         };
         let ramp_work = if ramping { ramp_work_at(&self.particles) } else { 0.0 };
+        self.grid_mass_kept = None;
         self.locate()?;
         self.detect_contact(dt);
         let (cone, apex) = match self.config.scheme {
@@ -533,6 +540,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         self.time += dt;
         self.step += 1;
+        self.check_inside()?;
         self.last = StepReport {
             step: self.step,
             time: self.time,
@@ -543,6 +551,29 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             apex_returns: apex,
         };
         Ok(self.last)
+    }
+
+    /// the end-of-step guard: every particle is still inside the grid (G2P already checked that
+    /// positions and velocities are finite). The stress update that ends USL, MUSL and USAVG
+    /// found each particle's next stencil, so this costs nothing there; otherwise (USF, or a
+    /// particle that left the grid) the next step's `locate` runs now, and the next step then
+    /// reuses it. So no step, the last one included, can end with material outside the grid,
+    /// and the error names the step that carried it out.
+    fn check_inside(&mut self) -> Result<(), SolverError> {
+        if self.scratch.stencils_ahead.is_some() {
+            return Ok(());
+        }
+        let step = self.step;
+        self.grid_mass_kept = Some(self.scratch.mass.iter().sum());
+        self.locate().map_err(|e| match e {
+            SolverError::OutsideGrid { particle, position, cause, .. } => {
+                SolverError::OutsideGrid { step, particle, position, cause }
+            }
+            other => other,
+        })?;
+        // Everything `locate` builds now describes the current positions.
+        self.scratch.stencils_ahead = Some(Ahead { changed: false, numbered: true });
+        Ok(())
     }
 
     /// steps until `end_time` (the last step is shortened to land on it) or until the observer stops.
@@ -633,4 +664,54 @@ fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), Sol
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use mpm_constitutive::LinearElastic;
+    use mpm_grid::{Bilinear, RegularGrid};
+
+    use crate::particles::{NewParticle, Particles};
+    use crate::{RunEnd, Scheme, Solver, SolverConfig, SolverError, TimeStep, Vector};
+
+    /// Regression: the last step of a run may carry a particle out of the grid, and nothing
+    /// looked at the positions after it: the run "completed" with material outside. Now the step
+    /// that carries it out fails, naming itself, for a scheme whose last loop finds the next
+    /// stencils (MUSL) and for one that does not (USF).
+    #[test]
+    fn the_step_that_carries_a_particle_out_of_the_grid_fails_even_when_it_is_the_last() {
+        for scheme in [Scheme::Musl, Scheme::Usf] {
+            // A 2 × 2 block at 10 m/s towards the right edge (x = 2 m), its front particles (1
+            // and 3) 0.105 m from it; the run ends 0.02 s later, long after they have crossed.
+            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+            let mut particles = Particles::default();
+            for (dx, dy) in [(0.0, 0.0), (0.125, 0.0), (0.0, 0.125), (0.125, 0.125)] {
+                particles.push(NewParticle::unstressed(
+                    Vector::new(1.77 + dx, 1.0 + dy),
+                    Vector::new(10.0, 0.0),
+                    0.125 * 0.125,
+                    1000.0,
+                    (),
+                ));
+            }
+            let config = SolverConfig {
+                scheme,
+                gravity: Vector::ZERO,
+                time_step: TimeStep::Courant(0.5),
+                ..Default::default()
+            };
+            let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+            let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+            match s.run_until(0.02, &mut ()) {
+                Err(SolverError::OutsideGrid { step, particle: 1, position, .. }) => {
+                    assert_eq!(step, s.step_count(), "{scheme:?}");
+                    assert!(position.x > 2.0, "{scheme:?}: {position}");
+                }
+                Ok(RunEnd::EndTime) => {
+                    panic!("{scheme:?}: completed with {}", s.particles().position[1])
+                }
+                other => panic!("{scheme:?}: {other:?}"),
+            }
+        }
+    }
 }

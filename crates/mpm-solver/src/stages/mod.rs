@@ -5,4 +5,4 @@ mod grid;
 mod locate;
 mod p2g;
 mod stress;
-mod timestep;
+pub(crate) mod timestep;

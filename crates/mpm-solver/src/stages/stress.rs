@@ -19,15 +19,15 @@ use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
 use crate::solver::{Ahead, Solver};
 use crate::stages::locate::store;
-use crate::stages::timestep::{SLOWEST, faster, particle_signal};
+use crate::stages::timestep::{Fastest, SLOWEST, particle_signal};
 
 /// What one chunk of particles reports back.
 struct ChunkTally {
     dissipation: Real,
     cone: usize,
     apex: usize,
-    /// the chunk's fastest signal, when the step asked for it
-    signal: (Real, usize),
+    /// the chunk's fastest signal and speed, when the step asked for them
+    signal: Fastest,
     /// some particle's next stencil has other nodes than its last one
     changed: bool,
     /// some particle's next stencil has a node outside the active set
@@ -89,111 +89,107 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             last && self.config.scheme == Scheme::Usl && self.config.transfer == Transfer::Apic;
         let affine = &p.affine;
 
-        let results: Vec<Result<ChunkTally, SolverError>> =
-            p.stress
-                .par_chunks_mut(chunk)
-                .zip(p.state.par_chunks_mut(chunk))
-                .zip(p.volume.par_chunks_mut(chunk))
-                .zip(sc.node_ids.par_chunks_mut(chunk))
-                .zip(sc.node_index.par_chunks_mut(chunk))
-                .zip(sc.weights.par_chunks_mut(chunk))
-                .zip(sc.gradients.par_chunks_mut(chunk))
-                .enumerate()
-                .map(|(c, ((((((stress, state), volume), ids), idx), weights), grads))| {
-                    let mut tally = ChunkTally::default();
-                    for j in 0..stress.len() {
-                        let q = c * chunk + j;
-                        let l = if from_affine {
-                            affine[q]
-                        } else {
-                            let mut l = Matrix::ZERO;
-                            for k in 0..N {
-                                let v = nodal[idx[j][k] as usize];
-                                let g: Vector = grads[j][k];
-                                l += Matrix::from_cols(v * g.x, v * g.y);
-                            }
-                            l
-                        };
-                        if last {
-                            // the next step's stencil, at the final position (`locate.rs`).
-                            match shape.stencil(position[q]) {
-                                Ok(s) => {
-                                    if store(s, &mut ids[j], &mut weights[j], &mut grads[j]) {
-                                        // its dense indices in the current active set, which
-                                        // `locate` keeps unless some node joins or leaves it.
-                                        tally.changed = true;
-                                        idx[j] = active.indices_of(&ids[j]);
-                                        tally.missing |= idx[j].contains(&u32::MAX);
-                                    }
+        let results: Vec<Result<ChunkTally, SolverError>> = p
+            .stress
+            .par_chunks_mut(chunk)
+            .zip(p.state.par_chunks_mut(chunk))
+            .zip(p.volume.par_chunks_mut(chunk))
+            .zip(sc.node_ids.par_chunks_mut(chunk))
+            .zip(sc.node_index.par_chunks_mut(chunk))
+            .zip(sc.weights.par_chunks_mut(chunk))
+            .zip(sc.gradients.par_chunks_mut(chunk))
+            .enumerate()
+            .map(|(c, ((((((stress, state), volume), ids), idx), weights), grads))| {
+                let mut tally = ChunkTally::default();
+                for j in 0..stress.len() {
+                    let q = c * chunk + j;
+                    let l = if from_affine {
+                        affine[q]
+                    } else {
+                        let mut l = Matrix::ZERO;
+                        for k in 0..N {
+                            let v = nodal[idx[j][k] as usize];
+                            let g: Vector = grads[j][k];
+                            l += Matrix::from_cols(v * g.x, v * g.y);
+                        }
+                        l
+                    };
+                    if last {
+                        // the next step's stencil, at the final position (`locate.rs`).
+                        match shape.stencil(position[q]) {
+                            Ok(s) => {
+                                if store(s, &mut ids[j], &mut weights[j], &mut grads[j]) {
+                                    // its dense indices in the current active set, which
+                                    // `locate` keeps unless some node joins or leaves it.
+                                    tally.changed = true;
+                                    idx[j] = active.indices_of(&ids[j]);
+                                    tally.missing |= idx[j].contains(&u32::MAX);
                                 }
-                                // `locate` repeats the search and names the particle.
-                                Err(_) => tally.outside = true,
                             }
+                            // `locate` repeats the search and names the particle.
+                            Err(_) => tally.outside = true,
                         }
-                        let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
-                        let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
-                        let d_eps = SymTensor::plane(dt * lxx, dt * lyy, 0.5 * dt * (lxy + lyx));
-                        let model = &materials[usize::from(material[q])];
-                        if objective {
-                            let theta = 0.5 * dt * (lyx - lxy);
-                            if theta != 0.0 {
-                                let (cos, sin) = cos_sin(theta);
-                                stress[j] = stress[j].rotated_z(cos, sin);
-                                let r = DMat3::from_cols(
-                                    DVec3::new(cos, sin, 0.0),
-                                    DVec3::new(-sin, cos, 0.0),
-                                    DVec3::Z,
-                                );
-                                model.rotate_state(&mut state[j], &r);
-                            }
+                    }
+                    let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
+                    let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
+                    let d_eps = SymTensor::plane(dt * lxx, dt * lyy, 0.5 * dt * (lxy + lyx));
+                    let model = &materials[usize::from(material[q])];
+                    if objective {
+                        let theta = 0.5 * dt * (lyx - lxy);
+                        if theta != 0.0 {
+                            let (cos, sin) = cos_sin(theta);
+                            stress[j] = stress[j].rotated_z(cos, sin);
+                            let r = DMat3::from_cols(
+                                DVec3::new(cos, sin, 0.0),
+                                DVec3::new(-sin, cos, 0.0),
+                                DVec3::Z,
+                            );
+                            model.rotate_state(&mut state[j], &r);
                         }
-                        let report = model.update(&mut stress[j], &mut state[j], &d_eps).map_err(
-                            |source| SolverError::Constitutive {
+                    }
+                    let report =
+                        model.update(&mut stress[j], &mut state[j], &d_eps).map_err(|source| {
+                            SolverError::Constitutive {
                                 step,
                                 particle: q,
                                 position: position[q],
                                 source,
-                            },
-                        )?;
-                        let ratio = 1.0 + d_eps.trace();
-                        if ratio.is_nan() || ratio <= 0.0 {
-                            return Err(SolverError::Inverted {
-                                step,
-                                particle: q,
-                                position: position[q],
-                                ratio,
-                            });
-                        }
-                        if M::IS_PLASTIC {
-                            // Dissipation per unit volume, over the volume at the start of the increment.
-                            tally.dissipation += volume[j] * report.dissipation;
-                            match report.surface {
-                                Surface::Cone => tally.cone += 1,
-                                Surface::Apex => tally.apex += 1,
-                                Surface::Elastic => {}
                             }
-                        }
-                        // No finiteness check of the new stress: the model returns a finite
-                        // stress or an error for finite input (ConstitutiveModel::update), and a
-                        // stress that an absurd increment overflowed is refused as input at the
-                        // next step, naming the particle.
-                        volume[j] *= ratio;
-                        if last {
-                            let m = usize::from(material[q]);
-                            let signal = particle_signal(
-                                moduli[m],
-                                caps[m],
-                                weight,
-                                volume[j],
-                                mass[q],
-                                velocity[q],
-                            );
-                            tally.signal = faster(tally.signal, (signal, q));
+                        })?;
+                    let ratio = 1.0 + d_eps.trace();
+                    if ratio.is_nan() || ratio <= 0.0 {
+                        return Err(SolverError::Inverted {
+                            step,
+                            particle: q,
+                            position: position[q],
+                            ratio,
+                        });
+                    }
+                    if M::IS_PLASTIC {
+                        // Dissipation per unit volume, over the volume at the start of the increment.
+                        tally.dissipation += volume[j] * report.dissipation;
+                        match report.surface {
+                            Surface::Cone => tally.cone += 1,
+                            Surface::Apex => tally.apex += 1,
+                            Surface::Elastic => {}
                         }
                     }
-                    Ok(tally)
-                })
-                .collect();
+                    // No finiteness check of the new stress: the model returns a finite
+                    // stress or an error for finite input (ConstitutiveModel::update), and a
+                    // stress that an absurd increment overflowed is refused as input at the
+                    // next step, naming the particle.
+                    volume[j] *= ratio;
+                    if last {
+                        let m = usize::from(material[q]);
+                        let speed = velocity[q].length();
+                        let signal =
+                            particle_signal(moduli[m], caps[m], weight, volume[j], mass[q], speed);
+                        tally.signal = tally.signal.with(signal, speed, q);
+                    }
+                }
+                Ok(tally)
+            })
+            .collect();
 
         let (mut cone, mut apex, mut signal) = (0, 0, SLOWEST);
         let (mut changed, mut missing, mut outside) = (false, false, false);
@@ -202,7 +198,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             self.dissipation.plastic += t.dissipation;
             cone += t.cone;
             apex += t.apex;
-            signal = faster(signal, t.signal);
+            signal = Fastest::merge(signal, t.signal);
             changed |= t.changed;
             missing |= t.missing;
             outside |= t.outside;

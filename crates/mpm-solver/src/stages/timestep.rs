@@ -20,6 +20,15 @@
 //! grain dilated sevenfold, true Courant number 1.06, out of the grid). A fixed Δt is checked
 //! against the true signal.
 //!
+//! **How far a particle moves.** The wave speed bounds how far a signal travels in a step, not
+//! how far the material does: a very soft or stress-free body (c ≈ 0) at rest would otherwise
+//! take one huge step in which gravity alone carries it through the floor. So Δt is also bounded
+//! by the displacement of the fastest particle under gravity, |v|_max Δt + ½ |g| Δt² ≤ C·L
+//! ([`displacement_dt`]; the full |g|, also during a gravity ramp): no particle moves more than
+//! the Courant number's fraction of a cell per step. On any stiff material (c ≫ |v|) this bound
+//! is far above eq 13's and never binds, so it changes no result of such a scene. A fixed Δt must
+//! keep that displacement within one cell ([`SolverError::StepTooLong`]).
+//!
 //! The signal needs every particle's final velocity and volume. Where a scheme's last particle loop
 //! sees both (the stress update that ends USL, MUSL and USAVG), that loop computes it for the next
 //! step with [`particle_signal`] and [`faster`], which saves a pass over the particles; otherwise
@@ -32,7 +41,7 @@ use rayon::prelude::*;
 
 use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
-use crate::math::{Real, Vector};
+use crate::math::Real;
 use crate::par::chunk_len;
 use crate::solver::Solver;
 
@@ -52,10 +61,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// (Δt, Courant number) of the next step, with Δt ≤ `max_dt`.
     pub(crate) fn time_step(&mut self, max_dt: Real) -> Result<(Real, Real), SolverError> {
-        let (signal, particle) = match self.next_signal.take() {
+        let fastest = match self.next_signal.take() {
             Some(known) => known,
             None => self.fastest_signal(),
         };
+        let (signal, particle) = fastest.signal;
         let speed = self.particles.velocity[particle.min(self.particles.len() - 1)].length();
         if !signal.is_finite() {
             // A NaN or infinite velocity or volume: name it before it spreads through the grid.
@@ -70,9 +80,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             });
         }
         let l = self.cell_size;
+        let g = self.config.gravity.length();
+        let (v_max, moving) = fastest.speed;
         match self.config.time_step {
             TimeStep::Courant(c) => {
-                let dt = (c * l / signal).min(max_dt);
+                let dt = (c * l / signal).min(displacement_dt(c * l, v_max, g)).min(max_dt);
                 Ok((dt, dt * signal / l))
             }
             TimeStep::Fixed(dt) => {
@@ -86,16 +98,27 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         dt,
                     });
                 }
+                let cells = (v_max * dt + 0.5 * g * dt * dt) / l;
+                if cells > TRUE_COURANT_MAX {
+                    let moving = moving.min(self.particles.len() - 1);
+                    return Err(SolverError::StepTooLong {
+                        step: self.step + 1,
+                        particle: moving,
+                        position: self.particles.position[moving],
+                        cells,
+                        dt,
+                    });
+                }
                 let dt = dt.min(max_dt);
                 Ok((dt, dt * signal / l))
             }
         }
     }
 
-    /// (max_p (c_p + |v_p|), that particle). Ties go to the lowest index, so the answer does not
-    /// depend on the thread count; a non-finite signal counts as infinite so that the first such
-    /// particle is the one reported.
-    fn fastest_signal(&self) -> (Real, usize) {
+    /// max_p (c_p + |v_p|) and max_p |v_p|, with their particles. Ties go to the lowest index, so
+    /// the answer does not depend on the thread count; a non-finite signal counts as infinite so
+    /// that the first such particle is the one reported.
+    fn fastest_signal(&self) -> Fastest {
         let p = &self.particles;
         let n = p.len();
         let chunk = chunk_len(n);
@@ -107,28 +130,52 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 for i in c * chunk..((c + 1) * chunk).min(n) {
                     let m = usize::from(p.material[i]);
                     let (modulus, cap) = (self.p_modulus[m], self.signal_cap[m]);
-                    let signal = particle_signal(
-                        modulus,
-                        cap,
-                        weight,
-                        p.volume[i],
-                        p.mass[i],
-                        p.velocity[i],
-                    );
-                    best = faster(best, (signal, i));
+                    let speed = p.velocity[i].length();
+                    let signal =
+                        particle_signal(modulus, cap, weight, p.volume[i], p.mass[i], speed);
+                    best = best.with(signal, speed, i);
                 }
                 best
             })
-            .reduce(|| SLOWEST, faster)
+            .reduce(|| SLOWEST, Fastest::merge)
     }
 }
 
-/// The identity of [`faster`]: no signal, no particle.
-pub(crate) const SLOWEST: (Real, usize) = (0.0, usize::MAX);
+/// The largest Δt for which a particle at speed `v` under gravity `g` moves at most `d`:
+/// the root of v Δt + ½ g Δt² = d (+∞ when nothing moves). The time step's second bound
+/// (module docs), exported so that a front end can predict the first Δt.
+pub fn displacement_dt(d: Real, v: Real, g: Real) -> Real {
+    // 2d / (v + √(v² + 2gd)): the rationalised root, exact also for g = 0 (d/v).
+    2.0 * d / (v + (v * v + 2.0 * g * d).sqrt())
+}
+
+/// What the time step needs from the particles: the fastest signal max_p s_p and the fastest
+/// speed max_p |v_p|, each with its particle.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fastest {
+    pub(crate) signal: (Real, usize),
+    pub(crate) speed: (Real, usize),
+}
+
+impl Fastest {
+    /// `self` with particle `i` of signal `signal` and speed `speed` taken into account.
+    #[inline(always)]
+    pub(crate) fn with(self, signal: Real, speed: Real, i: usize) -> Self {
+        Self { signal: faster(self.signal, (signal, i)), speed: faster(self.speed, (speed, i)) }
+    }
+
+    /// the faster of both parts (an associative, commutative merge of chunk results).
+    pub(crate) fn merge(a: Self, b: Self) -> Self {
+        Self { signal: faster(a.signal, b.signal), speed: faster(a.speed, b.speed) }
+    }
+}
+
+/// The identity of [`Fastest::merge`]: no signal, no particle.
+pub(crate) const SLOWEST: Fastest = Fastest { signal: (0.0, usize::MAX), speed: (0.0, usize::MAX) };
 
 /// max(ĉ_p + |v_p|, w (c̃_p + |v_p|)) with c̃_p² = M V_p / m_p for P-wave modulus M,
-/// ĉ_p² = min(c̃_p², `cap`), `cap` = M/ρ_ref and w = `weight` = C/C_max (module docs); a
-/// non-finite value counts as infinite.
+/// ĉ_p² = min(c̃_p², `cap`), `cap` = M/ρ_ref and w = `weight` = C/C_max (module docs), for a
+/// particle of speed |v_p| = `speed`; a non-finite value counts as infinite.
 #[inline(always)]
 pub(crate) fn particle_signal(
     modulus: Real,
@@ -136,10 +183,9 @@ pub(crate) fn particle_signal(
     weight: Real,
     volume: Real,
     mass: Real,
-    velocity: Vector,
+    speed: Real,
 ) -> Real {
     let c2 = modulus * volume / mass;
-    let speed = velocity.length();
     // A NaN volume must stay NaN (reported below), which `f64::min` would hide.
     let s = if c2 > cap {
         (cap.sqrt() + speed).max(weight * (c2.sqrt() + speed))
@@ -161,7 +207,7 @@ mod tests {
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
-    use crate::{Solver, SolverConfig, TimeStep, Vector};
+    use crate::{Solver, SolverConfig, SolverError, TimeStep, Vector};
 
     /// Two particles at rest of one material (ρ₀ = 1000 kg/m³, E = 1 MPa) on 0.25 m cells.
     fn pair() -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
@@ -238,6 +284,46 @@ mod tests {
         let c = (s.materials()[0].p_wave_modulus() / 1250.0).sqrt();
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert!((dt / (0.5 * 0.25 / (c + 10.0)) - 1.0).abs() < DT_TOL);
+    }
+
+    #[test]
+    fn a_stress_free_body_moves_at_most_the_courant_fraction_of_a_cell_per_step() {
+        // E = 1 mPa: c = 1.2e-3 m/s, so eq 13 alone gives Δt ≈ 100 s, in which gravity would
+        // carry the block 50 km through the floor. The displacement bound gives ½ g Δt² = C L.
+        let mut s = pair();
+        s.materials = vec![LinearElastic::from_young_poisson(1e-3, 0.3).unwrap()];
+        s.p_modulus = vec![s.materials[0].p_wave_modulus()];
+        s.signal_cap = vec![s.p_modulus[0] / 1000.0];
+        s.config.gravity = Vector::new(0.0, -9.81);
+        let (c, l, g): (f64, f64, f64) = (0.5, 0.25, 9.81);
+        let dt = s.time_step(f64::INFINITY).unwrap().0;
+        assert!((dt / (2.0 * c * l / g).sqrt() - 1.0).abs() < DT_TOL, "{dt}");
+        // moving at 3 m/s: 3 Δt + ½ g Δt² = C L.
+        s.particles_mut().velocity[1] = Vector::new(3.0, 0.0);
+        let dt = s.time_step(f64::INFINITY).unwrap().0;
+        assert!(((3.0 * dt + 0.5 * g * dt * dt) / (c * l) - 1.0).abs() < DT_TOL, "{dt}");
+        // A fixed Δt that lets gravity carry a particle over a cell is refused, naming it:
+        // 0.3 s at rest falls 0.44 m, 1.77 cells (its Courant number is 1.4e-3).
+        s.particles_mut().velocity[1] = Vector::ZERO;
+        s.particles_mut().velocity[0] = Vector::new(0.0, -1e-3);
+        s.config.time_step = TimeStep::Fixed(0.3);
+        let e = s.time_step(f64::INFINITY).unwrap_err();
+        let expected = (1e-3 * 0.3 + 0.5 * g * 0.09) / l;
+        assert!(
+            matches!(e, SolverError::StepTooLong { particle: 0, cells, .. }
+                if (cells - expected).abs() < 1e-12),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_displacement_bound_leaves_a_stiff_body_alone() {
+        // E = 1 MPa at rest under gravity: eq 13 (Δt = 3.4e-3 s) binds, not ½ g Δt² = C L
+        // (Δt = 0.16 s), so stiff scenes keep their time steps bit for bit.
+        let mut s = pair();
+        s.config.gravity = Vector::new(0.0, -9.81);
+        let dt = s.time_step(f64::INFINITY).unwrap().0;
+        assert_eq!(dt, 0.5 * 0.25 / (s.materials()[0].p_wave_modulus() / 1000.0).sqrt());
     }
 
     #[test]
