@@ -1,5 +1,21 @@
 //! Checkpoint files (bincode 2 with serde): the solver state, the scene text and the output
 //! history, so that `mpm resume DIR` continues a run bit-identically. All bincode use is here.
+//!
+//! A file is a 28-byte header and a payload:
+//! ```text
+//! MPMCKPT\n            8 bytes, the magic
+//! format               u32 little-endian ([`FORMAT`])
+//! payload length       u64 little-endian (bytes)
+//! payload checksum     u64 little-endian, FNV-1a 64 of the payload
+//! payload              bincode (standard configuration) of `CheckpointFile`
+//! ```
+//! A file is trusted only after all of these hold: the magic, the format, a length equal to what
+//! follows the header, and the checksum. FNV-1a changes its state by a bijection at every byte, so
+//! any change confined to one byte (every single-bit flip) always changes the checksum. The
+//! decoder may then claim at most 16 times the payload's size in memory for its collections (the
+//! largest expansion of any field: a `u16` material index is one varint byte), so even a
+//! checksummed file with a crafted length field cannot make it allocate more. What it decodes is
+//! checked again against the scene before the solver takes it (`run::resume`).
 
 use std::path::Path;
 
@@ -11,15 +27,22 @@ use crate::output::atomic;
 use crate::run::History;
 
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
-/// carries the output time, the solver state the time step's reference densities).
-pub(crate) const FORMAT: u32 = 2;
+/// carries the output time, the solver state the time step's reference densities; 3: the
+/// header with length and checksum, the history the energy check).
+pub(crate) const FORMAT: u32 = 3;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
 
-/// Refuse checkpoint files claiming more than this many bytes of content (a corrupt length
-/// field must not exhaust memory).
-const LIMIT: usize = 1 << 34;
+/// The first bytes of every checkpoint since format 3.
+const MAGIC: &[u8; 8] = b"MPMCKPT\n";
+
+/// Header length: magic, format, payload length, checksum.
+const HEADER: usize = 8 + 4 + 8 + 8;
+
+/// Largest checkpoint file read (bytes): 64 GiB, far above the ~200 B per particle of the
+/// largest admissible scene.
+const MAX_FILE: u64 = 1 << 36;
 
 /// Everything a checkpoint holds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -32,39 +55,93 @@ pub(crate) struct CheckpointFile {
     pub history: History,
 }
 
-fn config() -> impl bincode::config::Config {
-    bincode::config::standard().with_limit::<LIMIT>()
-}
-
-/// writes `c` to `path` atomically.
+/// writes `c` to `path` atomically, with its header.
 pub(crate) fn write(path: &Path, c: &CheckpointFile) -> Result<(), RunError> {
-    let bytes = bincode::serde::encode_to_vec(c, config()).map_err(|e| RunError::Checkpoint {
-        path: path.to_path_buf(),
-        reason: format!("cannot encode: {e}"),
+    let payload = bincode::serde::encode_to_vec(c, bincode::config::standard()).map_err(|e| {
+        RunError::Checkpoint { path: path.to_path_buf(), reason: format!("cannot encode: {e}") }
     })?;
-    atomic::write(path, &bytes)
+    atomic::write_parts(path, &[&header(&payload), &payload])
 }
 
-/// reads a checkpoint file.
+/// the header of `payload`.
+fn header(payload: &[u8]) -> Vec<u8> {
+    let mut h = Vec::with_capacity(HEADER);
+    h.extend_from_slice(MAGIC);
+    h.extend_from_slice(&FORMAT.to_le_bytes());
+    h.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    h.extend_from_slice(&crate::validate::fnv1a(payload).to_le_bytes());
+    h
+}
+
+/// reads and verifies a checkpoint file (see the module docs).
 pub(crate) fn read(path: &Path) -> Result<CheckpointFile, RunError> {
+    let refuse = |reason: String| RunError::Checkpoint { path: path.to_path_buf(), reason };
+    let size = std::fs::metadata(path)
+        .map_err(|source| RunError::Io { path: path.to_path_buf(), source })?
+        .len();
+    if size > MAX_FILE {
+        return Err(refuse(format!("{size} bytes, above the {MAX_FILE}-byte limit")));
+    }
     let bytes =
         std::fs::read(path).map_err(|source| RunError::Io { path: path.to_path_buf(), source })?;
-    // The format leads the file: read it alone first, so that another layout is named as such.
-    match bincode::serde::decode_from_slice::<u32, _>(&bytes, config()) {
-        Ok((format, _)) if format != FORMAT => {
-            return Err(RunError::Checkpoint {
-                path: path.to_path_buf(),
-                reason: format!("format {format} but this mpm reads format {FORMAT}"),
-            });
-        }
-        _ => {}
+    let payload = verify(&bytes).map_err(refuse)?;
+    let (c, used): (CheckpointFile, usize) = decode(payload)
+        .map_err(|e| refuse(format!("the checksum holds but the content does not decode ({e})")))?;
+    if used != payload.len() {
+        return Err(refuse(format!("{} bytes after the content", payload.len() - used)));
     }
-    let (c, _): (CheckpointFile, usize) = bincode::serde::decode_from_slice(&bytes, config())
-        .map_err(|e| RunError::Checkpoint {
-            path: path.to_path_buf(),
-            reason: format!("not a readable mpm checkpoint ({e})"),
-        })?;
+    if c.format != FORMAT {
+        return Err(refuse(format!("the content claims format {}", c.format)));
+    }
     Ok(c)
+}
+
+/// the payload of a checkpoint file's bytes, or why they are not one.
+fn verify(bytes: &[u8]) -> Result<&[u8], String> {
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        // Formats 1 and 2 began with the format as a bincode varint: name them as such.
+        return Err(match bytes.first() {
+            Some(&f @ 1..=2) => {
+                format!("format {f} but this mpm reads format {FORMAT}; rerun the scene")
+            }
+            _ => "not an mpm checkpoint (no `MPMCKPT` header)".into(),
+        });
+    }
+    let word = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or([0; 8]));
+    let format = u32::from_le_bytes(bytes[8..12].try_into().unwrap_or([0; 4]));
+    if format != FORMAT {
+        return Err(format!("format {format} but this mpm reads format {FORMAT}; rerun the scene"));
+    }
+    let (length, checksum) = (word(12), word(20));
+    let payload = &bytes[HEADER..];
+    if length != payload.len() as u64 {
+        return Err(format!(
+            "truncated or extended: the header gives {length} bytes of content, the file has {}",
+            payload.len()
+        ));
+    }
+    let actual = crate::validate::fnv1a(payload);
+    if actual != checksum {
+        return Err(format!(
+            "corrupt: checksum {actual:016x} of the content, {checksum:016x} in the header"
+        ));
+    }
+    Ok(payload)
+}
+
+/// decodes a verified payload, claiming at most 16 × its size for collections (a tier of
+/// bincode's compile-time limit).
+fn decode(payload: &[u8]) -> Result<(CheckpointFile, usize), bincode::error::DecodeError> {
+    use bincode::config::standard;
+    use bincode::serde::decode_from_slice as from;
+    match (payload.len() as u64).saturating_mul(16) {
+        n if n <= 1 << 20 => from(payload, standard().with_limit::<{ 1 << 20 }>()),
+        n if n <= 1 << 24 => from(payload, standard().with_limit::<{ 1 << 24 }>()),
+        n if n <= 1 << 28 => from(payload, standard().with_limit::<{ 1 << 28 }>()),
+        n if n <= 1 << 32 => from(payload, standard().with_limit::<{ 1 << 32 }>()),
+        n if n <= 1 << 36 => from(payload, standard().with_limit::<{ 1 << 36 }>()),
+        _ => from(payload, standard().with_limit::<{ 1 << 40 }>()),
+    }
 }
 
 /// FNV-1a 64 hash (hex) of a value's bincode bytes: equal for bit-identical values.
@@ -72,4 +149,37 @@ pub(crate) fn state_hash<T: Serialize>(value: &T) -> String {
     let bytes =
         bincode::serde::encode_to_vec(value, bincode::config::standard()).unwrap_or_default();
     format!("{:016x}", crate::validate::fnv1a(&bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_single_bit_flip_of_a_file_is_refused_before_decoding() {
+        let payload: Vec<u8> = (0..200u32).map(|i| (i * 37 % 251) as u8).collect();
+        let mut file = header(&payload);
+        file.extend_from_slice(&payload);
+        assert_eq!(verify(&file), Ok(&payload[..]));
+        for bit in 0..file.len() * 8 {
+            let mut flipped = file.clone();
+            flipped[bit / 8] ^= 1 << (bit % 8);
+            assert!(verify(&flipped).is_err(), "bit {bit} went unnoticed");
+        }
+        // truncated by one byte, or one byte appended
+        assert!(verify(&file[..file.len() - 1]).unwrap_err().contains("truncated"));
+        let mut longer = file.clone();
+        longer.push(0);
+        assert!(verify(&longer).unwrap_err().contains("truncated"));
+    }
+
+    #[test]
+    fn a_crafted_length_cannot_claim_more_than_sixteen_times_the_file() {
+        // A checksummed payload whose first field (the format, 3) is followed by a string length
+        // of 2^40 (varint 0xFD + u64): decoding must fail on the limit, not try to allocate.
+        let mut payload = vec![3u8, 0xFD];
+        payload.extend_from_slice(&(1u64 << 40).to_le_bytes());
+        let e = decode(&payload).unwrap_err();
+        assert!(matches!(e, bincode::error::DecodeError::LimitExceeded), "{e:?}");
+    }
 }

@@ -77,6 +77,20 @@ pub enum RunError {
         .0.display()
     )]
     OutputExists(PathBuf),
+    /// another run holds the output directory (its lock file names the process).
+    #[error(
+        "output directory {} is in use by another mpm run (process {pid}, lock file {}); wait \
+         for it, choose another directory with --out, or delete the lock file if no such run is \
+         active",
+        dir.display(),
+        dir.join(crate::run::LOCK_FILE).display()
+    )]
+    Locked {
+        /// the directory.
+        dir: PathBuf,
+        /// the holder's process id.
+        pid: u32,
+    },
     /// a file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

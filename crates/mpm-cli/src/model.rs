@@ -22,6 +22,16 @@ pub(crate) enum SavedState {
     Plastic(Checkpoint<DpState>),
 }
 
+impl SavedState {
+    /// (simulated time, steps, particles) of the stored state.
+    pub(crate) fn clock(&self) -> (f64, u64, usize) {
+        match self {
+            SavedState::Elastic(c) => (c.time, c.step, c.particles.len()),
+            SavedState::Plastic(c) => (c.time, c.step, c.particles.len()),
+        }
+    }
+}
+
 /// A constitutive model a scene can use.
 pub(crate) trait SceneModel: ConstitutiveModel + Clone + 'static {
     /// wraps a solver checkpoint for storage.

@@ -152,10 +152,15 @@ fn setup_error(scene: &Scene, message: &str) -> RunError {
 /// [`RunError::Solver`] after writing the files reached so far (including a frame of the
 /// failing state and the summary with the error).
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunError> {
-    if let Some(dir) = &opts.out_dir {
-        prepare_dir(dir, opts.force)?;
-        atomic::write(&dir.join("scene.toml"), scene.text.as_bytes())?;
-    }
+    // Held until the run returns: a second run into the directory is refused meanwhile.
+    let _lock = match &opts.out_dir {
+        Some(dir) => {
+            let lock = prepare_dir(dir, opts.force)?;
+            atomic::write(&dir.join("scene.toml"), scene.text.as_bytes())?;
+            Some(lock)
+        }
+        None => None,
+    };
     with_pool(opts, scene.r.seeds.len(), |threads| {
         model::dispatch(
             scene,
@@ -176,8 +181,10 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
                 .into(),
         });
     }
+    let _lock = DirLock::acquire(dir)?;
     let c = checkpoint::read(&path)?;
     let scene = load_scene_str(&c.scene_text, &c.origin)?;
+    fits_its_scene(&c, &scene).map_err(|reason| RunError::Checkpoint { path, reason })?;
     with_pool(opts, scene.r.seeds.len(), |threads| {
         model::dispatch(
             &scene,
@@ -189,6 +196,37 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
             },
         )?
     })
+}
+
+/// why a decoded checkpoint cannot continue its scene (its clock, counts and history must be
+/// those of a run of it), if it cannot.
+fn fits_its_scene(c: &CheckpointFile, scene: &Scene) -> Result<(), String> {
+    let r = &scene.r;
+    let (time, step, particles) = c.state.clock();
+    if !(time.is_finite() && (0.0..=r.end_time).contains(&time)) {
+        return Err(format!("time {time:e} s is not between 0 and end_time = {} s", r.end_time));
+    }
+    if step > r.max_steps {
+        return Err(format!("step {step} is above max_steps = {}", r.max_steps));
+    }
+    if particles != r.seeds.len() {
+        return Err(format!("{particles} particles, but its scene generates {}", r.seeds.len()));
+    }
+    // At most one row and one frame per step, besides those of t = 0.
+    let h = &c.history;
+    let rows = step.saturating_add(1);
+    let probes = rows.saturating_mul(r.output.probes.len() as u64);
+    for (what, n, most) in [
+        ("energy rows", h.energy.len() as u64, rows),
+        ("runout rows", h.runout.len() as u64, rows),
+        ("frames", h.frames.len() as u64, rows),
+        ("probe rows", h.probes.len() as u64, probes),
+    ] {
+        if n > most {
+            return Err(format!("{n} {what} after {step} steps (at most {most})"));
+        }
+    }
+    Ok(())
 }
 
 /// runs `f` in a pool of the requested threads (default: one per core), but no more than a
@@ -210,34 +248,133 @@ where
     pool.install(|| f(rayon::current_num_threads()))
 }
 
-/// refuses a non-empty existing directory unless `force`; creates the layout.
-fn prepare_dir(dir: &Path, force: bool) -> Result<(), RunError> {
+/// The lock file of a running output directory (it holds the process id).
+pub(crate) const LOCK_FILE: &str = ".mpm.lock";
+
+/// The files a run writes into its output directory (besides `frames/particles_*.vtp` and
+/// temporary `.NAME.tmp-PID.EXT` files): what `--force` removes.
+const RUN_FILES: [&str; 11] = [
+    "scene.toml",
+    "summary.json",
+    "particles.pvd",
+    "energy.csv",
+    "probes.csv",
+    "runout.csv",
+    checkpoint::FILE_NAME,
+    "plots/energy.png",
+    "plots/probes.png",
+    "plots/runout.png",
+    "plots/deposit.png",
+];
+
+/// One run per output directory: a lock file created atomically (a hard link of a file that
+/// already holds the process id, which fails if the lock exists) and removed when the run ends.
+/// A lock whose process no longer exists (a run killed with SIGKILL) is taken over.
+pub(crate) struct DirLock {
+    path: PathBuf,
+}
+
+impl DirLock {
+    /// takes the lock of `dir` (which must exist), or names the process holding it.
+    pub(crate) fn acquire(dir: &Path) -> Result<Self, RunError> {
+        let path = dir.join(LOCK_FILE);
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| RunError::Io { path, source }
+        };
+        let pid = std::process::id();
+        let mine = dir.join(format!("{LOCK_FILE}.{pid}"));
+        std::fs::write(&mine, format!("{pid}\n")).map_err(io(&mine))?;
+        let mut result = Err(RunError::Locked { dir: dir.to_path_buf(), pid: 0 });
+        // Two attempts: the second after removing a stale lock.
+        for _ in 0..2 {
+            match std::fs::hard_link(&mine, &path) {
+                Ok(()) => {
+                    result = Ok(DirLock { path: path.clone() });
+                    break;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let holder = std::fs::read_to_string(&path)
+                        .ok()
+                        .and_then(|t| t.trim().parse::<u32>().ok());
+                    match holder {
+                        Some(other) if !alive(other) => {
+                            let _ = std::fs::remove_file(&path);
+                        }
+                        other => {
+                            result = Err(RunError::Locked {
+                                dir: dir.to_path_buf(),
+                                pid: other.unwrap_or(0),
+                            });
+                            break;
+                        }
+                    }
+                }
+                Err(source) => {
+                    result = Err(RunError::Io { path: path.clone(), source });
+                    break;
+                }
+            }
+        }
+        let _ = std::fs::remove_file(&mine);
+        result
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// whether process `pid` exists (where `/proc` does not exist, every process counts as alive:
+/// the message then tells the user how to remove a stale lock).
+fn alive(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    !proc.is_dir() || proc.join(pid.to_string()).exists()
+}
+
+/// locks `dir` (creating it) and refuses it if it holds anything unless `force`, in which case
+/// the files an earlier run wrote are removed (and only those); creates the layout.
+fn prepare_dir(dir: &Path, force: bool) -> Result<DirLock, RunError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError::Io { path, source }
     };
-    if dir.exists() {
-        let non_empty = std::fs::read_dir(dir).map_err(io(dir))?.next().is_some();
-        if non_empty && !force {
-            return Err(RunError::OutputExists(dir.to_path_buf()));
-        }
-        if force {
-            // Stale frames of an earlier, longer run would otherwise stay beside the new ones.
-            if let Ok(entries) = std::fs::read_dir(dir.join("frames")) {
-                for e in entries.flatten() {
-                    let name = e.file_name().to_string_lossy().into_owned();
-                    if name.starts_with("particles_") && name.ends_with(".vtp") {
-                        let _ = std::fs::remove_file(e.path());
-                    }
-                }
-            }
-            let _ = std::fs::remove_file(dir.join(checkpoint::FILE_NAME));
-        }
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let lock = DirLock::acquire(dir)?;
+    let non_empty = std::fs::read_dir(dir)
+        .map_err(io(dir))?
+        .flatten()
+        .any(|e| !e.file_name().to_string_lossy().starts_with(LOCK_FILE));
+    if non_empty && !force {
+        return Err(RunError::OutputExists(dir.to_path_buf()));
     }
-    for d in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
+    if force {
+        remove_run_files(dir);
+    }
+    for d in [dir.join("frames"), dir.join("plots")] {
         std::fs::create_dir_all(&d).map_err(io(&d))?;
     }
-    Ok(())
+    Ok(lock)
+}
+
+/// removes what a run writes into `dir` (see [`RUN_FILES`]), leaving anything else.
+fn remove_run_files(dir: &Path) {
+    for name in RUN_FILES {
+        let _ = std::fs::remove_file(dir.join(name));
+    }
+    for sub in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
+        let Ok(entries) = std::fs::read_dir(&sub) else { continue };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let frame =
+                sub.ends_with("frames") && name.starts_with("particles_") && name.ends_with(".vtp");
+            if frame || (name.starts_with('.') && name.contains(".tmp-")) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
 }
 
 struct RunJob<'a> {
@@ -864,5 +1001,57 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint whose checksum holds but whose content cannot belong to its scene (a time of
+    /// −1.9e305 s made `resume` run forever; another particle count) is refused before the solver
+    /// takes it.
+    #[test]
+    fn a_checksummed_checkpoint_that_does_not_fit_its_scene_is_refused() {
+        let text = crate::embedded_scene("free_fall")
+            .unwrap()
+            .replace("end_time = 1.0", "end_time = 0.02");
+        let scene = load_scene_str(&text, "free_fall").unwrap();
+        let dir = std::env::temp_dir().join(format!("mpm-fits-{}", std::process::id()));
+        let opts = RunOptions {
+            out_dir: Some(dir.clone()),
+            quiet: true,
+            stop_after: Some(0.01),
+            ..Default::default()
+        };
+        run_scene(&scene, &opts).unwrap();
+        let path = dir.join(checkpoint::FILE_NAME);
+        let good = checkpoint::read(&path).unwrap();
+        let edits: [(&str, fn(&mut CheckpointFile)); 3] = [
+            ("time -1.9e305", |c| {
+                if let SavedState::Elastic(s) = &mut c.state {
+                    s.time = -1.9e305;
+                }
+            }),
+            ("particles, but its scene generates", |c| {
+                if let SavedState::Elastic(s) = &mut c.state {
+                    s.particles.position.pop();
+                }
+            }),
+            ("energy rows after", |c| {
+                let row = c.history.energy[0].clone();
+                c.history.energy.extend(std::iter::repeat_n(row, 10_000));
+            }),
+        ];
+        for (expect, edit) in edits {
+            let mut bad = good.clone();
+            edit(&mut bad);
+            checkpoint::write(&path, &bad).unwrap();
+            let RunOptions { threads, quiet, .. } = opts.clone();
+            let e = resume(&dir, &RunOptions { threads, quiet, ..Default::default() }).unwrap_err();
+            assert!(matches!(e, RunError::Checkpoint { .. }), "{expect}: {e}");
+            assert!(e.to_string().contains(expect), "{expect}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -312,6 +312,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 expected: "between 1 and 65536 materials",
             });
         }
+        if !(checkpoint.time.is_finite() && checkpoint.time >= 0.0) {
+            return Err(SolverError::InvalidSetting {
+                name: "checkpoint.time",
+                value: checkpoint.time,
+                expected: "a finite time ≥ 0 (s)",
+            });
+        }
+        let d = checkpoint.dissipation;
+        // A NaN initial energy means "not computed yet" (a new run); dissipation must be finite.
+        if let Some(bad) = [d.plastic, d.friction, d.constraint, d.external]
+            .into_iter()
+            .find(|e| !e.is_finite())
+            .or(Some(checkpoint.initial_stored).filter(|e| e.is_infinite()))
+        {
+            return Err(SolverError::InvalidSetting {
+                name: "checkpoint.energy",
+                value: bad,
+                expected: "finite energies (J/m)",
+            });
+        }
         let mut particles = particles;
         match config.transfer {
             // APIC starts from C_p = 0 unless the caller filled the affine matrices (with the

@@ -2,6 +2,7 @@
 //! short runs and their files, resume bit-identity, and the binary's commands.
 
 mod binary;
+mod guards;
 mod malformed;
 mod runs;
 mod scenes;

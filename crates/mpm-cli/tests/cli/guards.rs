@@ -1,0 +1,177 @@
+//! Issue 16: a run never ends "completed" on nonsense, checkpoints are verified, one run per
+//! output directory, SIGTERM checkpoints.
+
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use mpm_cli::{
+    CHECKPOINT_FILE, RunError, RunOptions, RunStatus, embedded_scene, load_scene_str, resume,
+    run_scene,
+};
+
+use crate::temp_dir;
+
+fn free_fall(edit: impl Fn(String) -> String) -> String {
+    edit(embedded_scene("free_fall").unwrap().to_string())
+}
+
+fn opts(dir: &Path) -> RunOptions {
+    RunOptions { out_dir: Some(dir.to_path_buf()), quiet: true, ..Default::default() }
+}
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// waits up to a minute for `path` to exist.
+fn wait_for(path: &Path) {
+    let start = Instant::now();
+    while !path.exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "{} never appeared", path.display());
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// A free fall that runs for many seconds (1.5 million steps).
+fn long_scene(dir: &Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let file = dir.join("long.toml");
+    let text = free_fall(|t| {
+        t.replace("end_time = 1.0", "end_time = 1000.0")
+            .replace("interval = 0.02", "interval = 100.0")
+    });
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+#[test]
+fn a_block_too_soft_to_stand_ends_with_the_energy_alarm_not_completed() {
+    // E = 1 mPa: the block is crushed flat on the floor. Before the guards it fell 8.7 m through
+    // the floor in one step and "completed" with exit 0.
+    let text = free_fall(|t| t.replace("young = 1.0e6", "young = 1.0e-3"));
+    let scene = load_scene_str(&text, "soft").unwrap();
+    let s = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    assert_eq!(s.status, RunStatus::EnergyAlarm, "{s:?}");
+    assert_eq!(s.status.exit_code(), 4);
+    // Measured −40 %; the alarm's threshold is 20 %.
+    let worst = s.energy_check.worst_relative_residual;
+    assert!(worst < -0.2, "{worst}");
+    assert!(s.error.as_deref().is_some_and(|e| e.contains("energy alarm")), "{:?}", s.error);
+    // No particle ends below the floor (y = 0) or out of the grid.
+    assert!(s.energy.potential >= 0.0, "{}", s.energy.potential);
+    // With energy_alarm_stop the run stops where the alarm trips.
+    let stop = text.replace("[solver]", "[solver]\nenergy_alarm_stop = true");
+    let scene = load_scene_str(&stop, "soft-stop").unwrap();
+    let t = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    assert_eq!(t.status, RunStatus::EnergyAlarm);
+    assert!(t.simulated_time < s.simulated_time, "{} vs {}", t.simulated_time, s.simulated_time);
+}
+
+#[test]
+fn a_run_that_reaches_max_steps_stops_with_the_step_limit() {
+    let text = free_fall(|t| t.replace("[solver]", "[solver]\nmax_steps = 1000000"));
+    // The estimate (end_time / initial Δt = 1468 steps) fits 1e6 but not 1000.
+    let small = text.replace("max_steps = 1000000", "max_steps = 1000");
+    let e = load_scene_str(&small, "small").unwrap_err();
+    assert!(e.to_string().contains("above max_steps = 1000"), "{e}");
+    // A run whose Δt shrinks below the estimate meets the limit during the run.
+    let text = text.replace("max_steps = 1000000", "max_steps = 1500");
+    let scene = load_scene_str(&text, "limit").unwrap();
+    let s = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    assert_eq!(s.status, RunStatus::StepLimit, "{s:?}");
+    assert_eq!((s.steps, s.status.exit_code()), (1500, 5));
+    assert!(s.simulated_time < 1.0);
+}
+
+#[test]
+fn single_bit_flips_of_a_checkpoint_are_refused_not_resumed_to_another_answer() {
+    let text = free_fall(|t| t.replace("end_time = 1.0", "end_time = 0.02"));
+    let scene = load_scene_str(&text, "ckpt").unwrap();
+    let dir = temp_dir("bitflip");
+    run_scene(&scene, &RunOptions { stop_after: Some(0.01), ..opts(&dir) }).unwrap();
+    let path = dir.join(CHECKPOINT_FILE);
+    let good = std::fs::read(&path).unwrap();
+    // 40 flips spread over the header and the payload (particle state, history, scene text).
+    for k in 0..40 {
+        let bit = k * (good.len() * 8 - 1) / 39;
+        let mut bad = good.clone();
+        bad[bit / 8] ^= 1 << (bit % 8);
+        std::fs::write(&path, &bad).unwrap();
+        let e = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+        assert!(matches!(e, RunError::Checkpoint { .. }), "bit {bit}: {e}");
+    }
+    // truncated
+    std::fs::write(&path, &good[..good.len() / 2]).unwrap();
+    let e = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+    assert!(e.to_string().contains("truncated"), "{e}");
+    // and the intact file still resumes
+    std::fs::write(&path, &good).unwrap();
+    let s = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    assert_eq!(s.status, RunStatus::Completed);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_second_run_into_a_busy_directory_is_refused_naming_the_first() {
+    let dir = temp_dir("busy");
+    let scene = long_scene(&dir);
+    let out = dir.join("out");
+    let mut first = spawn(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    wait_for(&out.join(".mpm.lock"));
+    let second = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(["run", "free_fall", "--out", out.to_str().unwrap(), "--force"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("in use by another mpm run (process {}", first.id())), "{err}");
+    // the first run's scene is untouched
+    let _ = Command::new("kill").args(["-TERM", &first.id().to_string()]).status();
+    first.wait().unwrap();
+    let written = std::fs::read_to_string(out.join("scene.toml")).unwrap();
+    assert!(written.contains("end_time = 1000.0"), "the second run overwrote the scene");
+    assert!(!out.join(".mpm.lock").exists(), "the lock outlived its run");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sigterm_checkpoints_and_exits_143() {
+    let dir = temp_dir("sigterm");
+    let scene = long_scene(&dir);
+    let out = dir.join("out");
+    let mut run = spawn(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    // frame 0 is written before the first step
+    wait_for(&out.join("frames/particles_000000.vtp"));
+    std::thread::sleep(Duration::from_millis(200));
+    let killed = Command::new("kill").args(["-TERM", &run.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let status = run.wait().unwrap();
+    assert_eq!(status.code(), Some(143));
+    assert!(out.join(CHECKPOINT_FILE).exists());
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn force_removes_what_the_previous_run_wrote_and_only_that() {
+    let dir = temp_dir("force");
+    // a run with probes, then one without: no probes.csv or probes.png may remain
+    let with = free_fall(|t| t.replace("end_time = 1.0", "end_time = 0.01"));
+    run_scene(&load_scene_str(&with, "with").unwrap(), &opts(&dir)).unwrap();
+    assert!(dir.join("probes.csv").exists() && dir.join("plots/probes.png").exists());
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let without = with.replace("probes = [{ nearest = [0.5, 1.5] }]", "");
+    let scene = load_scene_str(&without, "without").unwrap();
+    run_scene(&scene, &RunOptions { force: true, ..opts(&dir) }).unwrap();
+    assert!(!dir.join("probes.csv").exists());
+    assert!(!dir.join("plots/probes.png").exists());
+    assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
