@@ -1027,7 +1027,8 @@ mod tests {
         run_scene(&scene, &opts).unwrap();
         let path = dir.join(checkpoint::FILE_NAME);
         let good = checkpoint::read(&path).unwrap();
-        let edits: [(&str, fn(&mut CheckpointFile)); 3] = [
+        type Edit = fn(&mut CheckpointFile);
+        let edits: [(&str, Edit); 3] = [
             ("time -1.9e305", |c| {
                 if let SavedState::Elastic(s) = &mut c.state {
                     s.time = -1.9e305;
@@ -1039,7 +1040,7 @@ mod tests {
                 }
             }),
             ("energy rows after", |c| {
-                let row = c.history.energy[0].clone();
+                let row = c.history.energy[0];
                 c.history.energy.extend(std::iter::repeat_n(row, 10_000));
             }),
         ];
