@@ -75,19 +75,19 @@ pub struct ElementCaseResult {
 /// Runs the cases and writes `element_test.csv` and plots into `out_dir`.
 pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>, RunError> {
     if !(o.steps >= 1 && o.steps <= 10_000_000) {
-        return Err(RunError::Setup(format!(
+        return Err(RunError::Arguments(format!(
             "--steps {} is out of range: give 1 to 10000000 load steps",
             o.steps
         )));
     }
     if !o.strain.is_finite() || o.strain == 0.0 {
-        return Err(RunError::Setup(format!(
+        return Err(RunError::Arguments(format!(
             "--strain {} must be finite and non-zero (e.g. -1e-3 for compression, 0.05 for shear)",
             o.strain
         )));
     }
     if !o.confining_stress.is_finite() {
-        return Err(RunError::Setup("--confining-stress must be finite (Pa)".into()));
+        return Err(RunError::Arguments("--confining-stress must be finite (Pa)".into()));
     }
     let dir = &o.out_dir;
     let csv_path = dir.join("element_test.csv");
@@ -115,7 +115,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
                 mixing: m,
                 cone_match: ConeMatch::PlaneStrain,
             })
-            .map_err(|e| RunError::Setup(format!("material parameters refused: {e}")))?;
+            .map_err(|e| RunError::Arguments(format!("material parameters refused: {e}")))?;
             let path = match o.test {
                 ElementTest::Uniaxial => {
                     uniaxial_plane_strain(&model, SymTensor::ZERO, o.strain, o.steps)

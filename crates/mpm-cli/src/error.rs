@@ -115,6 +115,9 @@ pub enum RunError {
         /// what is wrong.
         reason: String,
     },
+    /// invalid command-line arguments (exit code 2, like an invalid scene).
+    #[error("{0}")]
+    Arguments(String),
     /// a thread pool or similar set-up failure.
     #[error("{0}")]
     Setup(String),

@@ -42,6 +42,7 @@
 mod checkpoint;
 mod element;
 mod error;
+pub mod limits;
 mod model;
 pub mod output;
 pub mod presets;
@@ -62,18 +63,48 @@ pub use summary::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use validate::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL, Scene, load_scene_str};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
-/// for the file).
+/// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
+/// refused before parsing; at most that many bytes are read, whatever the file is.
 pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
+    use std::io::Read;
     let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+    let refuse = |problem: String, admissible: &str, fix: &str| SceneError {
         origin: origin.clone(),
         line: None,
         column: None,
         path: String::new(),
         value: None,
-        problem: format!("cannot read the scene file: {e}"),
-        admissible: String::new(),
-        fix: "check the path (`mpm scenes` lists the embedded scenes)".into(),
+        problem,
+        admissible: admissible.into(),
+        fix: fix.into(),
+    };
+    let limit = limits::MAX_SCENE_BYTES;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(
+        |e| {
+            refuse(
+                format!("cannot read the scene file: {e}"),
+                "",
+                "check the path (`mpm scenes` lists the embedded scenes)",
+            )
+        },
+    )?;
+    if bytes.len() as u64 > limit {
+        return Err(refuse(
+            format!("the scene file is larger than {} MiB", limit >> 20),
+            &format!("a TOML scene of at most {limit} bytes"),
+            "check that this is the scene file; long outlines belong in fewer points",
+        ));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        refuse(
+            format!(
+                "not a text file: byte {} is not UTF-8 (a scene is TOML text)",
+                e.utf8_error().valid_up_to()
+            ),
+            "a UTF-8 TOML file",
+            "pass the scene's .toml file (`mpm scenes --write flume` writes an example)",
+        )
     })?;
     load_scene_str(&text, &origin)
 }

@@ -356,7 +356,9 @@ fn scene_failure(e: &SceneError) -> ExitCode {
 fn run_failure(e: &RunError) -> ExitCode {
     eprintln!("error: {e}");
     match e {
-        RunError::Scene(_) | RunError::Checkpoint { .. } => ExitCode::from(2),
+        RunError::Scene(_) | RunError::Checkpoint { .. } | RunError::Arguments(_) => {
+            ExitCode::from(2)
+        }
         RunError::Solver { .. } => ExitCode::from(3),
         _ => ExitCode::from(1),
     }

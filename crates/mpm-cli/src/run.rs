@@ -96,7 +96,10 @@ pub struct CheckReport {
     pub frame_bytes: u64,
 }
 
-/// Validates a scene fully (building the solver, locating every particle) without stepping.
+/// Validates a scene fully without building the solver's state: every particle is located on
+/// the grid (its stencil exists), and particles, active nodes, steps, memory and disk are
+/// estimated. Validation has already refused a scene that does not fit in memory or whose
+/// initial Δt needs more than `max_steps` steps.
 pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
     struct CheckJob;
     impl Job for CheckJob {
@@ -105,12 +108,16 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             self,
             scene: &Scene,
             shape: S,
-            materials: Vec<M>,
+            _materials: Vec<M>,
         ) -> Self::Output {
             let r = &scene.r;
-            let particles = model::particles(&r.seeds, &materials);
-            let solver = Solver::new(shape, materials, particles, r.config)
-                .map_err(|e| setup_error(scene, &e.to_string()))?;
+            let mut active = std::collections::HashSet::new();
+            for (i, seed) in r.seeds.iter().enumerate() {
+                let stencil = shape.stencil(seed.position).map_err(|e| {
+                    setup_error(scene, &format!("particle {i} at {}: {e}", seed.position))
+                })?;
+                active.extend(stencil.nodes);
+            }
             let cells = match &r.grid {
                 GridBuilt::Terrain(t) => [t.columns(), t.rows()],
                 GridBuilt::Regular(g) => g.cells(),
@@ -118,13 +125,21 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             let frames =
                 if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
             let per_frame = vtk::frame_bytes(r.seeds.len(), &r.output.fields, r.output.vtk_format);
+            let apic = r.config.transfer == mpm_solver::Transfer::Apic;
+            let state = std::mem::size_of::<M::State>();
             Ok(CheckReport {
                 particles: r.seeds.len(),
                 cells,
-                active_nodes: solver.active_nodes().len(),
+                active_nodes: active.len(),
                 initial_dt: r.initial_dt,
                 estimated_steps: (r.end_time / r.initial_dt).ceil() as u64,
-                memory_bytes: solver.heap_bytes(),
+                memory_bytes: mpm_solver::estimated_bytes(
+                    r.seeds.len(),
+                    active.len(),
+                    N,
+                    state,
+                    apic,
+                ) as usize,
                 frames,
                 frame_bytes: frames * per_frame,
             })

@@ -76,19 +76,19 @@ pub struct GridSpec {
     #[serde(default)]
     pub rows: Option<i64>,
     /// terrain: ground polyline `[[x, y], ...]`, x strictly increasing (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pairs")]
     pub profile: Option<Vec<[f64; 2]>>,
     /// terrain: `"snap"` (default) or `"reject"`.
     #[serde(default)]
     pub kink_policy: Option<KinkPolicySpec>,
     /// regular: lower-left node `[x, y]` (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub origin: Option<[f64; 2]>,
     /// regular: cell size `[dx, dy]` (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub cell: Option<[f64; 2]>,
     /// regular: number of cells `[nx, ny]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub cells: Option<[i64; 2]>,
 }
 
@@ -180,16 +180,16 @@ pub struct BodySpec {
     /// `"rectangle"`, `"polygon"` or `"on_slope"`.
     pub shape: ShapeKind,
     /// rectangle: lower-left corner (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub min: Option<[f64; 2]>,
     /// rectangle: upper-right corner (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub max: Option<[f64; 2]>,
     /// polygon: vertices in order (m).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pairs")]
     pub vertices: Option<Vec<[f64; 2]>>,
     /// on_slope: lower corner of the base (m); or give `base_x` to put it on the ground.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub base_start: Option<[f64; 2]>,
     /// on_slope: x of the base's lower corner, placed on the ground (m).
     #[serde(default)]
@@ -208,7 +208,7 @@ pub struct BodySpec {
     #[serde(default)]
     pub particles_per_cell: Option<i64>,
     /// initial velocity `[vx, vy]` (m/s), default `[0, 0]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub velocity: Option<[f64; 2]>,
 }
 
@@ -364,7 +364,7 @@ pub struct SolverSpec {
     /// simulated end time (s).
     pub end_time: f64,
     /// gravity `[gx, gy]` (m/s²), default `[0, -9.81]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::pair")]
     pub gravity: Option<[f64; 2]>,
     /// gravity ramp time (s), default 0.
     #[serde(default)]
@@ -485,7 +485,7 @@ impl<'de> Deserialize<'de> for ProbeSpec {
                     if key != "nearest" {
                         return Err(de::Error::unknown_field(&key, &["nearest"]));
                     }
-                    out = Some(ProbeSpec::Nearest(map.next_value()?));
+                    out = Some(ProbeSpec::Nearest(map.next_value::<exact::Two<f64>>()?.0));
                 }
                 out.ok_or_else(|| de::Error::missing_field("nearest"))
             }
@@ -561,4 +561,38 @@ pub struct OutputSpec {
     /// Ctrl-C).
     #[serde(default)]
     pub checkpoint_interval: Option<f64>,
+}
+
+/// 2-vectors that are exactly two values: serde's arrays read the first two elements of a longer
+/// TOML array and ignore the rest (`cell = [0.25, 0.25, 0.25]` was accepted).
+mod exact {
+    use serde::de::Error;
+    use serde::{Deserialize, Deserializer};
+
+    /// `[a, b]` and nothing else.
+    pub struct Two<T>(pub [T; 2]);
+
+    impl<'de, T: Deserialize<'de>> Deserialize<'de> for Two<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            let v = Vec::<T>::deserialize(d)?;
+            let n = v.len();
+            <[T; 2]>::try_from(v).map(Two).map_err(|_| {
+                D::Error::custom(format!("expected exactly 2 values [x, y], found {n}"))
+            })
+        }
+    }
+
+    /// an optional `[a, b]`.
+    pub fn pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<[T; 2]>, D::Error> {
+        Ok(Option::<Two<T>>::deserialize(d)?.map(|t| t.0))
+    }
+
+    /// an optional list of `[a, b]`.
+    pub fn pairs<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<Vec<[T; 2]>>, D::Error> {
+        Ok(Option::<Vec<Two<T>>>::deserialize(d)?.map(|v| v.into_iter().map(|t| t.0).collect()))
+    }
 }

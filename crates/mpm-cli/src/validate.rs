@@ -29,6 +29,15 @@ use crate::source::SourceMap;
 /// would otherwise exhaust memory before any message).
 pub const MAX_PARTICLES: usize = 20_000_000;
 
+/// Most bodies a scene may declare (the overlap check compares every pair's bounding boxes).
+pub const MAX_BODIES: usize = 10_000;
+
+/// Most vertices of a polygon (the simplicity check compares every pair of edges).
+pub const MAX_VERTICES: usize = 10_000;
+
+/// Most probes a scene may declare.
+pub const MAX_PROBES: usize = 10_000;
+
 /// Largest `particles_per_cell` (n × n per cell).
 pub const MAX_PARTICLES_PER_CELL: i64 = 16;
 
@@ -342,8 +351,11 @@ fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
             ),
         )
     } else if let Some(field) = quoted("missing field ") {
-        // A span covering the whole text is the top-level table.
-        if span.as_ref().is_some_and(|s| s.start == 0 && s.end + 1 >= ctx.map.len()) {
+        // A span covering the whole text is the top-level table, and so are the top-level
+        // sections, whatever key the span starts at (a file beginning with `title` that lacks
+        // `[grid]` must not be told to add `grid` to `title`).
+        let top = ["grid", "materials", "bodies", "solver"].contains(&field.as_str());
+        if top || span.as_ref().is_some_and(|s| s.start == 0 && s.end + 1 >= ctx.map.len()) {
             path.clear();
         }
         if !path.ends_with(&field) {
@@ -353,7 +365,13 @@ fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
         (
             format!("missing field `{field}`"),
             String::new(),
-            format!("add `{field} = ...` to `{table}` (see docs/scene-format.md)"),
+            if !top {
+                format!("add `{field} = ...` to `{table}` (see docs/scene-format.md)")
+            } else if field == "bodies" {
+                "add a `[[bodies]]` table (see docs/scene-format.md)".to_string()
+            } else {
+                format!("add a `[{field}]` table (see docs/scene-format.md)")
+            },
         )
     } else if let Some(v) = quoted("unknown variant ") {
         let admissible =
@@ -363,6 +381,12 @@ fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
         let admissible =
             message.split_once(", expected ").map(|(_, a)| a.to_string()).unwrap_or_default();
         (message.clone(), admissible, "write the value with the expected type".to_string())
+    } else if message.starts_with("expected exactly 2 values") {
+        (
+            message.clone(),
+            "two numbers [x, y]".to_string(),
+            "write exactly two values, e.g. `[0.25, 0.25]`".to_string(),
+        )
     } else if span.is_some() && path.is_empty() {
         (
             format!("TOML syntax error: {message}"),
@@ -696,13 +720,13 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             "add a [[bodies]] table with material, shape and its dimensions",
         ));
     }
-    if f.bodies.len() > usize::from(u16::MAX) {
+    if f.bodies.len() > MAX_BODIES {
         return Err(ctx.err(
             "bodies",
             Some(f.bodies.len().to_string()),
             "too many bodies",
-            "at most 65535 bodies",
-            "merge bodies of the same material",
+            format!("at most {MAX_BODIES} bodies"),
+            "merge bodies of the same material (a polygon can hold any outline)",
         ));
     }
     // Material indices: the used materials, in name order.
@@ -759,8 +783,10 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         MaterialsBuilt::Plastic(v) => v.iter().map(|m| m.elasticity().p_wave_modulus()).collect(),
     };
 
+    fits_in_memory(ctx, f, &grid, cell_x, shape_function, material_kind)?;
     let mut seeds: Vec<Seed> = Vec::new();
-    let mut shapes: Vec<Shape> = Vec::new();
+    // each earlier body's shape, bounding box and range of `seeds`.
+    let mut shapes: Vec<(Shape, [Vector; 2], std::ops::Range<usize>)> = Vec::new();
     let mut spacing_min = f64::INFINITY;
     let mut gimp_ppc = 1usize;
     for (b, body) in f.bodies.iter().enumerate() {
@@ -840,13 +866,20 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             }
         }
         // overlap with earlier bodies: a particle of one body strictly inside another's shape.
-        for (other, shape_o) in shapes.iter().enumerate() {
+        // Only bodies whose bounding boxes meet can overlap: O(bodies²) box tests, and particle
+        // tests only for the pairs that are close.
+        let bounds = shape_box(&shape);
+        for (other, (shape_o, bounds_o, range)) in shapes.iter().enumerate() {
+            let apart =
+                (0..2).any(|k| bounds[1][k] < bounds_o[0][k] || bounds_o[1][k] < bounds[0][k]);
+            if apart {
+                continue;
+            }
             let hit =
                 fill.iter().find(|s| contains(shape_o, s.position)).map(|s| s.position).or_else(
                     || {
-                        seeds
+                        seeds[range.clone()]
                             .iter()
-                            .filter(|s| usize::from(s.body) == other)
                             .find(|s| contains(&shape, s.position))
                             .map(|s| s.position)
                     },
@@ -865,6 +898,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
                 ));
             }
         }
+        let first = seeds.len();
         seeds.extend(fill.iter().map(|s| Seed {
             position: s.position,
             velocity: Vector::new(velocity[0], velocity[1]),
@@ -873,7 +907,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             material: m_index as u16,
             body: b as u16,
         }));
-        shapes.push(shape);
+        shapes.push((shape, bounds, first..seeds.len()));
     }
 
     // ---- boundaries ------------------------------------------------------------------------
@@ -1019,6 +1053,27 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
                 "give the simulated time between checkpoints, or remove it",
             ));
         }
+    }
+    if let Some(fields) = &o.fields {
+        if let Some(k) = (1..fields.len()).find(|&k| fields[..k].contains(&fields[k])) {
+            let name = toml::Value::try_from(fields[k]).map(|v| v.to_string()).unwrap_or_default();
+            return Err(ctx.err(
+                &format!("output.fields[{k}]"),
+                Some(name),
+                "the field is listed twice (each .vtp would hold two arrays of that name)",
+                "each field at most once",
+                "remove the repeated entry",
+            ));
+        }
+    }
+    if let Some(list) = o.probes.as_ref().filter(|l| l.len() > MAX_PROBES) {
+        return Err(ctx.err(
+            "output.probes",
+            Some(format!("{} probes", list.len())),
+            "too many probes",
+            format!("at most {MAX_PROBES} probes (each writes a row per series interval)"),
+            "probe a few particles; the particle frames hold every particle",
+        ));
     }
     let mut probes = Vec::new();
     for (k, probe) in o.probes.iter().flatten().enumerate() {
@@ -1232,12 +1287,12 @@ fn body_shape(
             let v = body.vertices.clone().ok_or_else(|| {
                 ctx.missing(&p("vertices"), "polygon", "[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]")
             })?;
-            if v.len() < 3 {
+            if v.len() < 3 || v.len() > MAX_VERTICES {
                 return Err(ctx.err(
                     &p("vertices"),
                     Some(format!("{} vertices", v.len())),
-                    "a polygon needs at least three vertices",
-                    "3 or more vertices, in order",
+                    format!("a polygon needs at least three vertices and at most {MAX_VERTICES}"),
+                    format!("3 to {MAX_VERTICES} vertices, in order"),
                     "list the polygon's corners in order",
                 ));
             }
@@ -1250,7 +1305,21 @@ fn body_shape(
                     "give the vertex in metres",
                 ));
             }
-            Ok(Shape::Polygon { vertices: v.iter().map(|x| Vector::new(x[0], x[1])).collect() })
+            let vertices: Vec<Vector> = v.iter().map(|x| Vector::new(x[0], x[1])).collect();
+            if let Some((a, b)) = self_intersection(&vertices) {
+                return Err(ctx.err(
+                    &format!("{}[{a}]", p("vertices")),
+                    Some(pair(v[a])),
+                    format!(
+                        "the polygon is not simple: its edge from vertex {a} crosses the edge from \
+                         vertex {b} (a bow-tie has no inside)"
+                    ),
+                    "a simple polygon: edges meet only at their shared corners",
+                    "list the corners in order around the outline (clockwise or counter-\
+                     clockwise), or split the shape into two bodies",
+                ));
+            }
+            Ok(Shape::Polygon { vertices })
         }
         ShapeKind::OnSlope => {
             let length = body.length.ok_or_else(|| ctx.missing(&p("length"), "on_slope", "1.2"))?;
@@ -1344,6 +1413,141 @@ fn shape_name(k: ShapeKind) -> &'static str {
         ShapeKind::Polygon => "polygon",
         ShapeKind::OnSlope => "on_slope",
     }
+}
+
+/// refuses a scene whose particles would not fit in the memory this process may use, before any
+/// particle exists: the count comes from the bodies' areas (n² particles per cell), the bytes per
+/// particle from the solver's own accounting (`mpm_solver::estimated_bytes`), plus the scene's
+/// seeds and one particle frame being written.
+fn fits_in_memory(
+    ctx: &Ctx<'_>,
+    f: &SceneFile,
+    grid: &GridBuilt,
+    cell_x: f64,
+    shape_function: ShapeFunctionKind,
+    material: MaterialKind,
+) -> Result<(), SceneError> {
+    let mut particles = 0.0;
+    for (b, body) in f.bodies.iter().enumerate() {
+        let ppc = body.particles_per_cell.unwrap_or(2).clamp(1, MAX_PARTICLES_PER_CELL) as f64;
+        // a body whose shape is invalid is reported, located, by the bodies' loop
+        if let Ok(shape) = body_shape(ctx, &format!("bodies[{b}]"), body, grid) {
+            particles += shape_area(&shape) * (ppc / cell_x).powi(2);
+        }
+    }
+    if !(particles.is_finite() && particles <= MAX_PARTICLES as f64) {
+        // the bodies' loop names the body and the limit
+        return Ok(());
+    }
+    let n = particles.ceil() as usize;
+    let (stencil, nodes) = match (grid, shape_function) {
+        (GridBuilt::Terrain(t), _) => (4, (t.columns() + 1) * (t.rows() + 1)),
+        (GridBuilt::Regular(g), kind) => {
+            let [nx, ny] = g.cells();
+            (if kind == ShapeFunctionKind::Bilinear { 4 } else { 9 }, (nx + 3) * (ny + 3))
+        }
+    };
+    let state = match material {
+        MaterialKind::Elastic => 0,
+        MaterialKind::DruckerPrager => std::mem::size_of::<mpm_constitutive::DpState>(),
+    };
+    let apic = f.solver.transfer == Some(Transfer::Apic);
+    let fields = f.output.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec());
+    let frame =
+        crate::output::vtk::frame_bytes(n, &fields, f.output.vtk_format.unwrap_or_default());
+    let need =
+        mpm_solver::estimated_bytes(n, nodes.min(n.saturating_mul(stencil)), stencil, state, apic)
+            + (n * std::mem::size_of::<Seed>()) as u64
+            + frame;
+    let Some((available, source)) = crate::limits::available_memory() else { return Ok(()) };
+    if need > available {
+        return Err(ctx.err(
+            "bodies",
+            None,
+            format!(
+                "the scene needs about {:.0} MB for {n} particles ({:.0} B each, with the grid \
+                 and one frame being written), but only {:.0} MB are available ({source})",
+                need as f64 / 1e6,
+                need as f64 / n.max(1) as f64,
+                available as f64 / 1e6
+            ),
+            format!("at most about {:.0} MB", available as f64 / 1e6),
+            "use a coarser grid, fewer particles per cell or smaller bodies, or run it on a \
+             machine with more memory",
+        ));
+    }
+    Ok(())
+}
+
+/// the first pair (i, j) of non-adjacent edges (edge k runs from vertex k to k + 1, the last one
+/// back to vertex 0) that cross or touch, or a repeated vertex: `None` for a simple polygon.
+/// O(n²) in the vertices, bounded by [`MAX_VERTICES`].
+fn self_intersection(v: &[Vector]) -> Option<(usize, usize)> {
+    let n = v.len();
+    let edge = |k: usize| (v[k], v[(k + 1) % n]);
+    let orient = |a: Vector, b: Vector, c: Vector| (b - a).perp_dot(c - a);
+    let on_segment = |a: Vector, b: Vector, c: Vector| {
+        c.x >= a.x.min(b.x) && c.x <= a.x.max(b.x) && c.y >= a.y.min(b.y) && c.y <= a.y.max(b.y)
+    };
+    let meet = |(p1, p2): (Vector, Vector), (q1, q2): (Vector, Vector)| {
+        let (d1, d2) = (orient(q1, q2, p1), orient(q1, q2, p2));
+        let (d3, d4) = (orient(p1, p2, q1), orient(p1, p2, q2));
+        if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+            && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+        {
+            return true;
+        }
+        (d1 == 0.0 && on_segment(q1, q2, p1))
+            || (d2 == 0.0 && on_segment(q1, q2, p2))
+            || (d3 == 0.0 && on_segment(p1, p2, q1))
+            || (d4 == 0.0 && on_segment(p1, p2, q2))
+    };
+    for i in 0..n {
+        let (lo_i, hi_i) = (edge(i).0.min(edge(i).1), edge(i).0.max(edge(i).1));
+        for j in i + 1..n {
+            // adjacent edges share a corner: only a repeated vertex or a fold back counts
+            let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+            let (a, b) = (edge(j).0.min(edge(j).1), edge(j).0.max(edge(j).1));
+            if a.x > hi_i.x || b.x < lo_i.x || a.y > hi_i.y || b.y < lo_i.y {
+                continue;
+            }
+            if adjacent {
+                // collinear and overlapping beyond the shared corner: a fold back
+                let (shared, p, q) =
+                    if j == i + 1 { (v[j], v[i], v[(j + 1) % n]) } else { (v[0], v[1], v[n - 1]) };
+                let folded = orient(p, shared, q) == 0.0 && (p - shared).dot(q - shared) > 0.0;
+                if folded || v[i] == v[(i + 1) % n] {
+                    return Some((i, j));
+                }
+                continue;
+            }
+            if meet(edge(i), edge(j)) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+/// the axis-aligned bounding box [min, max] of a shape.
+fn shape_box(shape: &Shape) -> [Vector; 2] {
+    let corners: Vec<Vector> = match shape {
+        Shape::Rectangle { min, max } => vec![*min, *max],
+        Shape::Polygon { vertices } => vertices.clone(),
+        Shape::OnSlope { base_start, angle_rad, length, thickness } => {
+            let d = Vector::new(angle_rad.cos(), angle_rad.sin());
+            let n = Vector::new(-d.y, d.x);
+            vec![
+                *base_start,
+                *base_start + *length * d,
+                *base_start + *length * d + *thickness * n,
+                *base_start + *thickness * n,
+            ]
+        }
+    };
+    let lo = corners.iter().fold(Vector::splat(f64::INFINITY), |a, &c| a.min(c));
+    let hi = corners.iter().fold(Vector::splat(f64::NEG_INFINITY), |a, &c| a.max(c));
+    [lo, hi]
 }
 
 fn shape_area(shape: &Shape) -> f64 {

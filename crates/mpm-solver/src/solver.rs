@@ -614,6 +614,41 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
+/// heap bytes a running solver of `particles` particles, `nodes` active nodes, stencils of
+/// `stencil` nodes, a constitutive state of `state_bytes` bytes and (with `apic`) affine
+/// matrices holds: what [`Solver::heap_bytes`] reports once it runs, computed without
+/// building it, so that a front end can refuse a scene that does not fit in memory before
+/// allocating anything.
+pub fn estimated_bytes(
+    particles: usize,
+    nodes: usize,
+    stencil: usize,
+    state_bytes: usize,
+    apic: bool,
+) -> u64 {
+    use std::mem::size_of;
+    let per_particle = 3 * size_of::<Vector>()
+        + 2 * size_of::<Real>()
+        + size_of::<SymTensor>()
+        + state_bytes
+        + 2 * size_of::<u16>()
+        + if apic { size_of::<Matrix>() } else { 0 }
+        // node ids, dense indices, weights, gradients, node-list entries
+        + stencil
+            * (size_of::<NodeId>()
+                + size_of::<u32>()
+                + size_of::<Real>()
+                + size_of::<Vector>()
+                + size_of::<u32>());
+    let per_node = size_of::<NodeId>()
+        + 8
+        + size_of::<u32>()
+        + size_of::<Real>()
+        + 3 * size_of::<Vector>()
+        + if apic { size_of::<Vector>() } else { 0 };
+    (particles as u64) * per_particle as u64 + (nodes as u64) * per_node as u64
+}
+
 /// the time step's reference density of each material: the checkpoint's (a resumed run keeps the
 /// density it started with), or in a new run the lightest density of each material's particles
 /// (a material no particle uses gets +∞, which leaves its particles uncapped should any appear).

@@ -175,3 +175,38 @@ fn force_removes_what_the_previous_run_wrote_and_only_that() {
     assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn ten_million_particles_are_refused_under_a_small_memory_limit_without_allocating_them() {
+    let dir = temp_dir("memory");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("big.toml");
+    // 50 m × 5 m at 0.01 m cells, 2 × 2 per cell: 10 million particles (≈ 5.5 GB to run).
+    let text = free_fall(|t| {
+        t.replace("origin = [-1.0, 0.0]", "origin = [0.0, 0.0]")
+            .replace("cell = [0.25, 0.25]", "cell = [0.01, 0.01]")
+            .replace("cells = [12, 16]", "cells = [5100, 600]")
+            .replace("min = [0.0, 1.0]", "min = [0.5, 0.5]")
+            .replace("max = [1.0, 2.0]", "max = [50.5, 5.5]")
+            .replace("probes = [{ nearest = [0.5, 1.5] }]", "")
+    });
+    std::fs::write(&file, text).unwrap();
+    // Under `ulimit -v` of 300 MB: generating the particles alone (56 B each) would abort the
+    // process (exit 134); the estimate refuses the scene first, with exit 2 and the numbers.
+    let script =
+        format!("ulimit -v 300000; exec {} check {}", env!("CARGO_BIN_EXE_mpm"), file.display());
+    let out = Command::new("sh").args(["-c", &script]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("for 10000000 particles") && err.contains("MB are available"), "{err}");
+    // and through the environment variable, for machines with room to spare
+    let out = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(["run", file.to_str().unwrap(), "--out", dir.join("o").to_str().unwrap()])
+        .env("MPM_MEMORY_LIMIT", "100000000")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("(MPM_MEMORY_LIMIT)"));
+    assert!(!dir.join("o").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,72 @@
+//! What the machine allows a run: the memory available to this process, and the size of a scene
+//! file. Scenes are checked against these before anything large is allocated.
+
+/// Largest scene file read (bytes). Scenes are hand-written settings and outlines; 4 MiB holds a
+/// profile or polygon of ~100 000 points, and parsing it peaks near 100× its size.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// The memory this process may still use (bytes) and where that limit comes from: the smallest
+/// of the memory the kernel reports available (`MemAvailable`), the address-space limit
+/// (`ulimit -v`), the cgroup's memory limit minus its usage, and the environment variable
+/// `MPM_MEMORY_LIMIT` (bytes; for tests and shared machines). `None` where none is known.
+pub fn available_memory() -> Option<(u64, &'static str)> {
+    let mut best: Option<(u64, &'static str)> = None;
+    let mut take = |bytes: Option<u64>, source: &'static str| {
+        if let Some(b) = bytes {
+            if best.is_none_or(|(m, _)| b < m) {
+                best = Some((b, source));
+            }
+        }
+    };
+    let read = |path: &str| std::fs::read_to_string(path).ok();
+    take(
+        read("/proc/meminfo").and_then(|t| field_kib(&t, "MemAvailable:")).map(|k| k * 1024),
+        "available memory (/proc/meminfo)",
+    );
+    take(
+        read("/proc/self/limits").and_then(|t| address_limit(&t)),
+        "address-space limit (ulimit -v)",
+    );
+    let cgroup =
+        read("/sys/fs/cgroup/memory.max").and_then(|m| m.trim().parse::<u64>().ok()).map(|max| {
+            let used = read("/sys/fs/cgroup/memory.current")
+                .and_then(|c| c.trim().parse::<u64>().ok())
+                .unwrap_or(0);
+            max.saturating_sub(used)
+        });
+    take(cgroup, "cgroup memory limit (/sys/fs/cgroup/memory.max)");
+    take(
+        std::env::var("MPM_MEMORY_LIMIT").ok().and_then(|v| v.trim().parse::<u64>().ok()),
+        "MPM_MEMORY_LIMIT",
+    );
+    best
+}
+
+/// the value (kB) of a `/proc/meminfo` line starting with `key`.
+fn field_kib(text: &str, key: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    line[key.len()..].split_whitespace().next()?.parse().ok()
+}
+
+/// the soft "Max address space" of `/proc/self/limits` (bytes), `None` when unlimited.
+fn address_limit(text: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line["Max address space".len()..].split_whitespace().next()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn proc_files_are_read_as_the_kernel_writes_them() {
+        let meminfo = "MemTotal:       24000000 kB\nMemAvailable:   12345678 kB\n";
+        assert_eq!(field_kib(meminfo, "MemAvailable:"), Some(12_345_678));
+        let limits = "Limit                     Soft Limit           Hard Limit           Units\n\
+                      Max address space         409600000            unlimited            bytes\n";
+        assert_eq!(address_limit(limits), Some(409_600_000));
+        let unlimited =
+            "Max address space         unlimited            unlimited            bytes\n";
+        assert_eq!(address_limit(unlimited), None);
+    }
+}
