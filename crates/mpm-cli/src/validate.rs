@@ -1013,9 +1013,11 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             Some(num(value)),
             format!(
                 "the run would take {shown} steps or more (initial Δt {} s to end_time {} s), \
-                 above max_steps = {max_steps}",
+                 above max_steps = {max_steps}; the fastest signal is {} m/s at particle \
+                 {fastest} (wave speed √(M/ρ) of its material plus its speed)",
                 num(initial_dt),
-                num(s.end_time)
+                num(s.end_time),
+                num(signal)
             ),
             format!("end_time / Δt ≤ max_steps = {max_steps}"),
             "check the material's density and stiffness and the Courant number or dt (they set \
