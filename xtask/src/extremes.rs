@@ -16,9 +16,9 @@
 //! failed row makes the command exit non-zero.
 //!
 //! The residual is judged as `mpm run` judges it (`mpm_solver::EnergyCheck`): at every step,
-//! residual(t) / (KE₀ + strain₀ + Σ m_p |g| h_p + released(t) + |W_ext|), where h_p is the
-//! height of particle p above the ground below it at the start and released(t) the largest drop
-//! of gravitational potential energy so far. The residual is the ledger's (stored + dissipated) −
+//! residual(t) / (KE₀ + strain₀ + Σ m_p |g| h_p + released(t)), where h_p is the height of
+//! particle p above the ground below it at the start and released(t) the largest drop of
+//! gravitational potential energy by motion so far. The residual is the ledger's (stored + dissipated) −
 //! (initial + external work): positive when the integrator creates energy.
 
 use std::fmt::Write as _;
@@ -603,7 +603,7 @@ pub fn run() -> Result<bool> {
     );
     let _ = writeln!(
         report,
-        "Energy residual = the residual / (KE₀ + strain₀ + Σ m g h₀ + potential energy released so far + |external work|) \
+        "Energy residual = the residual / (KE₀ + strain₀ + Σ m g h₀ + potential energy released by motion so far) \
          of largest magnitude over the steps (mpm_solver::EnergyCheck); positive when the integrator creates energy. \
          V/V0 = smallest and largest particle volume ratio at the end; below ground = deepest particle below the ground.\n"
     );

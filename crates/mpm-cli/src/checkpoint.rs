@@ -12,9 +12,10 @@
 //! A file is trusted only after all of these hold: the magic, the format, a length equal to what
 //! follows the header, and the checksum. FNV-1a changes its state by a bijection at every byte, so
 //! any change confined to one byte (every single-bit flip) always changes the checksum. The
-//! decoder may then claim at most 16 times the payload's size in memory for its collections (the
-//! largest expansion of any field: a `u16` material index is one varint byte), so even a
-//! checksummed file with a crafted length field cannot make it allocate more. What it decodes is
+//! decoder may then claim for its collections the first power of 16 (from 1 MiB) at or above 16
+//! times the payload's size, so between 16 and 256 times it (the largest expansion of any field
+//! is below 16: a `u16` material index is one varint byte), so even a checksummed file with a
+//! crafted length field cannot make it allocate more. What it decodes is
 //! checked again against the scene before the solver takes it (`run::resume`).
 
 use std::path::Path;
@@ -58,7 +59,7 @@ pub(crate) struct CheckpointFile {
 /// writes `c` to `path` atomically, with its header.
 pub(crate) fn write(path: &Path, c: &CheckpointFile) -> Result<(), RunError> {
     let payload = bincode::serde::encode_to_vec(c, bincode::config::standard()).map_err(|e| {
-        RunError::Checkpoint { path: path.to_path_buf(), reason: format!("cannot encode: {e}") }
+        RunError::Setup(format!("cannot encode the checkpoint {}: {e}", path.display()))
     })?;
     atomic::write_parts(path, &[&header(&payload), &payload])
 }
@@ -129,8 +130,8 @@ fn verify(bytes: &[u8]) -> Result<&[u8], String> {
     Ok(payload)
 }
 
-/// decodes a verified payload, claiming at most 16 × its size for collections (a tier of
-/// bincode's compile-time limit).
+/// decodes a verified payload, claiming for collections at most the first power of 16 at or
+/// above 16 × its size (bincode's limit is a compile-time constant: one tier each).
 fn decode(payload: &[u8]) -> Result<(CheckpointFile, usize), bincode::error::DecodeError> {
     use bincode::config::standard;
     use bincode::serde::decode_from_slice as from;
@@ -174,7 +175,7 @@ mod tests {
     }
 
     #[test]
-    fn a_crafted_length_cannot_claim_more_than_sixteen_times_the_file() {
+    fn a_crafted_length_cannot_claim_more_than_the_payloads_tier() {
         // A checksummed payload whose first field (the format, 3) is followed by a string length
         // of 2^40 (varint 0xFD + u64): decoding must fail on the limit, not try to allocate.
         let mut payload = vec![3u8, 0xFD];

@@ -283,44 +283,76 @@ const RUN_FILES: [&str; 11] = [
 ];
 
 /// One run per output directory: a lock file created atomically (a hard link of a file that
-/// already holds the process id, which fails if the lock exists) and removed when the run ends.
-/// A lock whose process no longer exists (a run killed with SIGKILL) is taken over.
+/// already holds the process id, which fails if the lock exists; where the file system has no
+/// hard links, an exclusive create) and removed when the run ends. A lock whose process no
+/// longer exists (a run killed with SIGKILL) is taken over: renamed aside, which only one process
+/// can do, and checked to be the stale one before it is deleted. A lock holding this process's
+/// own id is stale unless this process holds it now (a restarted container often gets the same
+/// pid as the run it replaces).
 pub(crate) struct DirLock {
     path: PathBuf,
 }
+
+/// The locks this process holds (a library user may start runs from several threads).
+static HELD: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
 impl DirLock {
     /// takes the lock of `dir` (which must exist), or names the process holding it.
     pub(crate) fn acquire(dir: &Path) -> Result<Self, RunError> {
         let path = dir.join(LOCK_FILE);
-        let io = |path: &Path| {
-            let path = path.to_path_buf();
-            move |source| RunError::Io { path, source }
-        };
         let pid = std::process::id();
         let mine = dir.join(format!("{LOCK_FILE}.{pid}"));
-        std::fs::write(&mine, format!("{pid}\n")).map_err(io(&mine))?;
-        let mut result = Err(RunError::Locked { dir: dir.to_path_buf(), pid: 0 });
-        // Two attempts: the second after removing a stale lock.
-        for _ in 0..2 {
-            match std::fs::hard_link(&mine, &path) {
+        std::fs::write(&mine, format!("{pid}\n"))
+            .map_err(|source| RunError::Io { path: mine.clone(), source })?;
+        let locked = |holder: Option<u32>| {
+            Err(RunError::Locked { dir: dir.to_path_buf(), pid: holder.unwrap_or(0) })
+        };
+        let mut result = locked(None);
+        // A few attempts: after taking over a stale lock, or when the holder ended meanwhile.
+        for _ in 0..4 {
+            let linked = match std::fs::hard_link(&mine, &path) {
+                Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
+                    // no hard links here: an exclusive create, then the pid
+                    std::fs::OpenOptions::new().write(true).create_new(true).open(&path).and_then(
+                        |mut f| std::io::Write::write_all(&mut f, format!("{pid}\n").as_bytes()),
+                    )
+                }
+                other => other,
+            };
+            match linked {
                 Ok(()) => {
+                    if let Ok(mut held) = HELD.lock() {
+                        held.push(path.clone());
+                    }
                     result = Ok(DirLock { path: path.clone() });
                     break;
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = std::fs::read_to_string(&path)
-                        .ok()
-                        .and_then(|t| t.trim().parse::<u32>().ok());
+                    let holder = match std::fs::read_to_string(&path) {
+                        Ok(text) => text.trim().parse::<u32>().ok(),
+                        // the holder ended between our attempt and the read: try again
+                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                        Err(_) => None,
+                    };
                     match holder {
-                        Some(other) if !alive(other) => {
-                            let _ = std::fs::remove_file(&path);
+                        Some(other) if stale(other, &path) => {
+                            let aside = dir.join(format!("{LOCK_FILE}.stale-{pid}"));
+                            if std::fs::rename(&path, &aside).is_ok() {
+                                let moved = std::fs::read_to_string(&aside)
+                                    .ok()
+                                    .and_then(|t| t.trim().parse::<u32>().ok());
+                                if moved != Some(other) {
+                                    // another process took the stale lock over first and this
+                                    // moved its live one: put it back
+                                    let _ = std::fs::rename(&aside, &path);
+                                    result = locked(moved);
+                                    break;
+                                }
+                                let _ = std::fs::remove_file(&aside);
+                            }
                         }
                         other => {
-                            result = Err(RunError::Locked {
-                                dir: dir.to_path_buf(),
-                                pid: other.unwrap_or(0),
-                            });
+                            result = locked(other);
                             break;
                         }
                     }
@@ -339,14 +371,21 @@ impl DirLock {
 impl Drop for DirLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        if let Ok(mut held) = HELD.lock() {
+            held.retain(|p| p != &self.path);
+        }
     }
 }
 
-/// whether process `pid` exists (where `/proc` does not exist, every process counts as alive:
-/// the message then tells the user how to remove a stale lock).
-fn alive(pid: u32) -> bool {
+/// whether a lock at `path` naming process `pid` is stale: that process does not exist, or it
+/// is this process and this process does not hold the lock. Where `/proc` does not exist, every
+/// other process counts as alive (the message then tells the user how to remove a stale lock).
+fn stale(pid: u32, path: &Path) -> bool {
+    if pid == std::process::id() {
+        return HELD.lock().is_ok_and(|held| !held.iter().any(|p| p == path));
+    }
     let proc = Path::new("/proc");
-    !proc.is_dir() || proc.join(pid.to_string()).exists()
+    proc.is_dir() && !proc.join(pid.to_string()).exists()
 }
 
 /// locks `dir` (creating it) and refuses it if it holds anything unless `force`, in which case
@@ -473,8 +512,9 @@ impl Job for RunJob<'_> {
             (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
                 RunStatus::StepLimit,
                 Some(format!(
-                    "step limit: {} steps reached at t = {:.6e} s before end_time = {} s; raise \
-                     `[solver] max_steps` if the run is sound (Δt {:.3e} s)",
+                    "step limit: {} steps reached at t = {:.6e} s before end_time = {} s (Δt \
+                     {:.3e} s); no checkpoint is written: if the run is sound, run the scene \
+                     again with a higher `[solver] max_steps`",
                     solver.step_count(),
                     solver.time(),
                     r.end_time,

@@ -1307,7 +1307,11 @@ fn body_shape(
                     "give the vertex in metres",
                 ));
             }
-            let vertices: Vec<Vector> = v.iter().map(|x| Vector::new(x[0], x[1])).collect();
+            let mut vertices: Vec<Vector> = v.iter().map(|x| Vector::new(x[0], x[1])).collect();
+            // A closing vertex that repeats the first one is a common way to write an outline.
+            if vertices.len() > 3 && vertices.first() == vertices.last() {
+                vertices.pop();
+            }
             if let Some((a, b)) = self_intersection(&vertices) {
                 return Err(ctx.err(
                     &format!("{}[{a}]", p("vertices")),
@@ -1434,7 +1438,18 @@ fn fits_in_memory(
         let ppc = body.particles_per_cell.unwrap_or(2).clamp(1, MAX_PARTICLES_PER_CELL) as f64;
         // a body whose shape is invalid is reported, located, by the bodies' loop
         if let Ok(shape) = body_shape(ctx, &format!("bodies[{b}]"), body, grid) {
-            particles += shape_area(&shape) * (ppc / cell_x).powi(2);
+            let area = match &shape {
+                // the enclosed area (the shoelace formula), not the bounding box
+                Shape::Polygon { vertices } => {
+                    let n = vertices.len();
+                    0.5 * (0..n)
+                        .map(|k| vertices[k].perp_dot(vertices[(k + 1) % n]))
+                        .sum::<f64>()
+                        .abs()
+                }
+                other => shape_area(other),
+            };
+            particles += area * (ppc / cell_x).powi(2);
         }
     }
     if !(particles.is_finite() && particles <= MAX_PARTICLES as f64) {

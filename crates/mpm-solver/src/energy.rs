@@ -68,10 +68,12 @@ pub struct Dissipation {
 ///
 /// The ledger's residual alone has no scale: the potential energy's zero is arbitrary. It is
 /// judged against
-/// `scale(t) = KE₀ + U₀ + Σ_p m_p |g| h_p + released(t) + |W_ext(t)|`:
+/// `scale(t) = KE₀ + U₀ + Σ_p m_p |g| h_p + released(t)`:
 /// the initial kinetic and strain energy, the potential energy of every particle above the
-/// ground below it at the start (h_p ≥ 0), the largest drop of potential energy below its initial
-/// value so far, and the external work. The relative residual `residual / scale` is 0 for a
+/// ground below it at the start (h_p ≥ 0, full gravity), and the largest energy the motion has
+/// released so far, max over time of (P₀ − (P(t) − W_ext(t))): the drop of potential energy
+/// not counting what a gravity ramp booked as external work (which depends on where the origin
+/// is, not on the motion). The relative residual `residual / scale` is 0 for a
 /// perfect integrator, positive when the integration creates energy and negative when it loses
 /// energy it does not book as dissipation (a body crushed into the floor, a collapse that a
 /// contact law absorbs without friction work).
@@ -102,8 +104,8 @@ impl EnergyCheck {
 
     /// the scale of `e` (see the type's docs), after taking its potential energy into account.
     fn scale(&mut self, e: &EnergyLedger) -> Real {
-        self.released = self.released.max(self.initial_potential - e.potential);
-        self.initial_scale + self.released + e.external_work.abs()
+        self.released = self.released.max(self.initial_potential - (e.potential - e.external_work));
+        self.initial_scale + self.released
     }
 
     /// the relative residual of `e` at time `t`, remembered if it is the largest in magnitude so

@@ -560,13 +560,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         self.time += dt;
         self.step += 1;
+        // (the guard may re-locate: the report counts this step's nodes)
+        let active_nodes = self.scratch.active.len();
         self.check_inside()?;
         self.last = StepReport {
             step: self.step,
             time: self.time,
             dt,
             courant,
-            active_nodes: self.scratch.active.len(),
+            active_nodes,
             cone_returns: cone,
             apex_returns: apex,
         };

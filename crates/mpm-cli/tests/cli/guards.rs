@@ -210,3 +210,42 @@ fn ten_million_particles_are_refused_under_a_small_memory_limit_without_allocati
     assert!(!dir.join("o").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_lock_left_by_a_killed_run_is_taken_over() {
+    let text = free_fall(|t| t.replace("end_time = 1.0", "end_time = 0.01"));
+    let scene = load_scene_str(&text, "stale").unwrap();
+    // a dead process (pids do not reach 4e9), and this very process (a restarted container gets
+    // the pid of the run it replaces) while it holds no lock there
+    for holder in [4_000_000_000u32, std::process::id()] {
+        let dir = temp_dir("stale");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join(".mpm.lock"), format!("{holder}\n")).unwrap();
+        let s = run_scene(&scene, &opts(&dir)).unwrap();
+        assert_eq!(s.status, RunStatus::Completed, "holder {holder}");
+        assert!(!dir.join(".mpm.lock").exists());
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".mpm.lock"))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn a_polygon_closed_by_repeating_its_first_vertex_is_accepted() {
+    let closed = free_fall(|t| {
+        t.replace("shape = \"rectangle\"", "shape = \"polygon\"")
+            .replace("min = [0.0, 1.0]\n", "")
+            .replace(
+                "max = [1.0, 2.0]",
+                "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0], [0.0, 1.0]]",
+            )
+    });
+    let scene = load_scene_str(&closed, "closed").unwrap();
+    // the same 64 particles as the 1 m × 1 m rectangle
+    assert_eq!(scene.particle_count(), 64);
+}
