@@ -143,12 +143,9 @@ fn simulate<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize>(
     ground: impl Fn(f64) -> f64,
 ) -> Result<Measured, SolverError> {
     let mut s = Solver::new(shape, vec![material], particles, config)?;
-    let g = config.gravity.length();
     let p = s.particles();
-    let heights: f64 = (0..p.len())
-        .map(|i| p.mass[i] * g * (p.position[i].y - ground(p.position[i].x)).max(0.0))
-        .sum();
-    let mut check = EnergyCheck::new(&s.energy(), heights);
+    let mut check =
+        EnergyCheck::new(&s.energy(), &p.position, &p.mass, config.gravity.length(), &ground);
     let v0 = p.volume.clone();
     // First step decides Δt; the end time is shortened so that the row stays within MAX_STEPS.
     let first = s.step()?;

@@ -487,8 +487,14 @@ impl Job for RunJob<'_> {
         if fresh {
             let m0 = driver.metrics(&solver);
             driver.history.initial = Some(m0);
-            driver.history.energy_check =
-                Some(EnergyCheck::new(&solver.energy(), driver.height_energy(&solver)));
+            let p = solver.particles();
+            driver.history.energy_check = Some(EnergyCheck::new(
+                &solver.energy(),
+                &p.position,
+                &p.mass,
+                r.config.gravity.length(),
+                |x| ground_height(&r.ground, x),
+            ));
             driver.record_series(&solver);
             driver.write_frame(&solver)?;
             driver.flush_series()?;
@@ -506,7 +512,6 @@ impl Job for RunJob<'_> {
         if let Some(e) = driver.io_error.take() {
             return Err(e);
         }
-        let alarm = alarm_message(&driver.history, r.alarm.threshold);
         let (status, error) = match (&result, driver.stop) {
             (Err(e), _) => (RunStatus::Failed, Some(e.to_string())),
             (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
@@ -521,9 +526,11 @@ impl Job for RunJob<'_> {
                     solver.last_report().dt
                 )),
             ),
-            (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => (RunStatus::EnergyAlarm, alarm),
+            (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
+                (RunStatus::EnergyAlarm, alarm_message(&driver.history, r.alarm.threshold))
+            }
             (Ok(RunEnd::Stopped), None) => (RunStatus::Interrupted, None),
-            (Ok(RunEnd::EndTime), _) if alarm.is_some() => (RunStatus::EnergyAlarm, alarm),
+            // (judged below, once the final row is in)
             (Ok(RunEnd::EndTime), _) => (RunStatus::Completed, None),
         };
         // The checkpoint holds the history as an uninterrupted run has it at this step (the
@@ -634,21 +641,6 @@ impl Driver<'_> {
             column,
             self.history.initial.as_ref(),
         )
-    }
-
-    /// Σ_p m_p |g| h_p, h_p the height of particle p above the ground (the energy check's scale).
-    fn height_energy<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
-        &self,
-        solver: &Solver<M, S, N>,
-    ) -> f64 {
-        let r = &self.scene.r;
-        let p = solver.particles();
-        let g = r.config.gravity.length();
-        p.position
-            .iter()
-            .zip(&p.mass)
-            .map(|(x, m)| m * g * (x.y - ground_height(&r.ground, x.x)).max(0.0))
-            .sum()
     }
 
     fn record_series<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(

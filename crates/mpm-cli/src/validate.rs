@@ -1438,18 +1438,7 @@ fn fits_in_memory(
         let ppc = body.particles_per_cell.unwrap_or(2).clamp(1, MAX_PARTICLES_PER_CELL) as f64;
         // a body whose shape is invalid is reported, located, by the bodies' loop
         if let Ok(shape) = body_shape(ctx, &format!("bodies[{b}]"), body, grid) {
-            let area = match &shape {
-                // the enclosed area (the shoelace formula), not the bounding box
-                Shape::Polygon { vertices } => {
-                    let n = vertices.len();
-                    0.5 * (0..n)
-                        .map(|k| vertices[k].perp_dot(vertices[(k + 1) % n]))
-                        .sum::<f64>()
-                        .abs()
-                }
-                other => shape_area(other),
-            };
-            particles += area * (ppc / cell_x).powi(2);
+            particles += enclosed_area(&shape) * (ppc / cell_x).powi(2);
         }
     }
     if !(particles.is_finite() && particles <= MAX_PARTICLES as f64) {
@@ -1567,6 +1556,7 @@ fn shape_box(shape: &Shape) -> [Vector; 2] {
     [lo, hi]
 }
 
+/// the area the fill's lattice scans (a polygon's bounding box): what bounds generation work.
 fn shape_area(shape: &Shape) -> f64 {
     match shape {
         Shape::Rectangle { min, max } => (max.x - min.x) * (max.y - min.y),
@@ -1578,6 +1568,17 @@ fn shape_area(shape: &Shape) -> f64 {
             );
             (hi.x - lo.x) * (hi.y - lo.y)
         }
+    }
+}
+
+/// the area a shape encloses (a polygon's by the shoelace formula): what bounds its particles.
+fn enclosed_area(shape: &Shape) -> f64 {
+    match shape {
+        Shape::Polygon { vertices } => {
+            let n = vertices.len();
+            0.5 * (0..n).map(|k| vertices[k].perp_dot(vertices[(k + 1) % n])).sum::<f64>().abs()
+        }
+        other => shape_area(other),
     }
 }
 

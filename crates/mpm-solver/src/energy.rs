@@ -11,7 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::math::Real;
+use crate::math::{Real, Vector};
 
 /// Energies of one instant (J per metre of thickness).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -92,11 +92,20 @@ pub struct EnergyCheck {
 }
 
 impl EnergyCheck {
-    /// starts from the initial ledger and `height_energy` = Σ_p m_p |g| h_p with h_p the height
-    /// of particle p above the ground at the start.
-    pub fn new(initial: &EnergyLedger, height_energy: Real) -> Self {
+    /// starts from the initial ledger of particles at `position` with masses `mass`, under
+    /// gravity of magnitude `g`, above the ground of height `ground(x)` (h_p = the particle's
+    /// height above it, 0 below it).
+    pub fn new(
+        initial: &EnergyLedger,
+        position: &[Vector],
+        mass: &[Real],
+        g: Real,
+        ground: impl Fn(Real) -> Real,
+    ) -> Self {
+        let height_energy: Real =
+            position.iter().zip(mass).map(|(x, m)| m * g * (x.y - ground(x.x)).max(0.0)).sum();
         Self {
-            initial_scale: initial.kinetic + initial.strain + height_energy.max(0.0),
+            initial_scale: initial.kinetic + initial.strain + height_energy,
             initial_potential: initial.potential,
             ..Self::default()
         }
@@ -138,8 +147,12 @@ mod tests {
 
     #[test]
     fn the_scale_grows_with_the_released_potential_and_keeps_the_worst_residual() {
-        // A body of m g h = 100 J/m above the ground, at rest.
-        let mut c = EnergyCheck::new(&ledger(0.0, 500.0, 0.0), 100.0);
+        // A body of m g h = 100 J/m above the ground, at rest: 1 kg at 10 m under g = 10 m/s²
+        // (ground at y = 2), and a particle below the ground, which adds nothing.
+        let position = [Vector::new(3.0, 12.0), Vector::new(0.0, -1.0)];
+        let ground = |_x: Real| 2.0;
+        let mut c =
+            EnergyCheck::new(&ledger(0.0, 500.0, 0.0), &position, &[1.0, 5.0], 10.0, ground);
         assert_eq!(c.observe(0.0, &ledger(0.0, 500.0, 0.0)), 0.0);
         // It falls 60 J/m and shows a residual of −16 J/m: −16 / (100 + 60).
         assert_eq!(c.observe(1.0, &ledger(44.0, 440.0, -16.0)), -0.1);
