@@ -24,6 +24,9 @@ use crate::stencil::Stencil;
 
 /// log2 of the block side.
 const BLOCK_SHIFT: u32 = 3;
+/// nodes along each side of a block: block (bi, bj) holds nodes i in [8 bi, 8 bi + 8) and
+/// j in [8 bj, 8 bj + 8).
+pub const BLOCK_SIDE: i32 = 1 << BLOCK_SHIFT;
 /// block side − 1, the mask of a node's position inside its block.
 const IN_BLOCK: i32 = (1 << BLOCK_SHIFT) - 1;
 /// value of an empty hash slot.
@@ -233,9 +236,9 @@ impl ActiveNodes {
         out
     }
 
-    /// the index table of the block with `key`, if that block is active.
+    /// the rank of the block with `key`, if that block is active: one hash probe.
     #[inline]
-    fn block_of(&self, key: u64) -> Option<&BlockIndex> {
+    fn probe(&self, key: u64) -> Option<usize> {
         if self.tables.is_empty() {
             return None;
         }
@@ -247,32 +250,24 @@ impl ActiveNodes {
                 return None;
             }
             if slot.key == key {
-                return Some(&self.tables[slot.value as usize]);
+                return Some(slot.value as usize);
             }
             s = (s + 1) & mask;
         }
     }
 
+    /// the index table of the block with `key`, if that block is active.
+    #[inline]
+    fn block_of(&self, key: u64) -> Option<&BlockIndex> {
+        self.probe(key).map(|rank| &self.tables[rank])
+    }
+
     /// dense index of `node`, `None` if it is not active. O(1): one hash probe, one table read.
     #[inline]
     pub fn index_of(&self, node: NodeId) -> Option<usize> {
-        if self.tables.is_empty() {
-            return None;
-        }
         let (key, bit) = split(node);
-        let mask = self.slots.len() - 1;
-        let mut s = self.home(key);
-        loop {
-            let slot = self.slots[s];
-            if slot.value == EMPTY {
-                return None;
-            }
-            if slot.key == key {
-                let t = &self.tables[slot.value as usize];
-                return ((t.mask >> bit) & 1 == 1).then(|| t.dense[bit as usize] as usize);
-            }
-            s = (s + 1) & mask;
-        }
+        let t = self.block_of(key)?;
+        ((t.mask >> bit) & 1 == 1).then(|| t.dense[bit as usize] as usize)
     }
 
     /// true when `node` is active.
@@ -294,6 +289,19 @@ impl ActiveNodes {
     /// 0..len(). Handy for deterministic block-parallel work on nodes.
     pub fn block_ranges(&self) -> impl ExactSizeIterator<Item = Range<usize>> + '_ {
         self.offsets.windows(2).map(|w| w[0]..w[1])
+    }
+
+    /// the lowest node (8 bi, 8 bj) of block `rank` (ranks follow [`Self::block_ranges`]).
+    pub fn block_origin(&self, rank: usize) -> NodeId {
+        let (i, j) = block_origin(self.blocks[rank].key);
+        NodeId::new(i, j)
+    }
+
+    /// the rank of the block holding `node`, if that block is active (it has some active
+    /// node, not necessarily this one).
+    #[inline]
+    pub fn block_rank(&self, node: NodeId) -> Option<usize> {
+        self.probe(split(node).0)
     }
 
     /// heap bytes reserved (capacity, not length): follows the largest material footprint seen,

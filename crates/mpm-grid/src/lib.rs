@@ -61,7 +61,7 @@ mod skewed_cell;
 mod stencil;
 mod terrain;
 
-pub use active::ActiveNodes;
+pub use active::{ActiveNodes, BLOCK_SIDE};
 pub use bilinear::Bilinear;
 pub use bspline::QuadraticBSpline;
 pub use error::{GridError, LocateError};
@@ -70,7 +70,7 @@ pub use math::{Matrix, Real, Vector};
 pub use node::{BoundaryNormals, CellCoords, NodeId};
 pub use regular::RegularGrid;
 pub use skewed_cell::SkewedCell;
-pub use stencil::{ShapeFunctions, Stencil};
+pub use stencil::{ShapeFunctions, Stencil, stencil_side};
 pub use terrain::{
     AdjacentSegments, GroundSegment, KINK_TOLERANCE, KinkPolicy, TerrainGrid, TerrainGridSpec,
 };

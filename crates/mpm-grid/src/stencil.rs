@@ -10,6 +10,10 @@ use crate::node::{BoundaryNormals, NodeId};
 /// Weights sum to one and reproduce linear fields (Σ N_i x_i = x, Σ x_i ⊗ ∇N_i = I). A node can
 /// appear with weight zero (a point on a cell edge, a point at a uGIMP support's rim); no node
 /// appears twice.
+///
+/// Every stencil is a tensor product of w × w nodes, w = [`stencil_side`]`(N)`: slot k holds
+/// node `nodes[0]` + (k mod w, k div w), so `nodes[0]` is its lowest (i, j) corner. Solvers
+/// rely on this to scatter a particle into a block-local patch of nodes from its first node alone.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencil<const N: usize> {
     /// the nodes.
@@ -25,6 +29,16 @@ impl<const N: usize> Stencil<N> {
     pub fn iter(&self) -> impl Iterator<Item = (NodeId, f64, Vector)> + '_ {
         (0..N).map(move |k| (self.nodes[k], self.weights[k], self.gradients[k]))
     }
+}
+
+/// the side w of a w × w tensor-product stencil of `n` nodes (2 for 4 nodes, 3 for 9).
+pub const fn stencil_side(n: usize) -> usize {
+    let mut w = 1;
+    while w * w < n {
+        w += 1;
+    }
+    assert!(w * w == n, "a stencil is a square of nodes");
+    w
 }
 
 /// One interface over every grid + shape-function pair (no allocation, no dyn).

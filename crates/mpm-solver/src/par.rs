@@ -6,6 +6,8 @@
 //! the thread count), sums each chunk in index order, and adds the chunk sums in chunk order. The
 //! result is bit-identical for any number of threads.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rayon::prelude::*;
 
 /// Items per chunk of a large loop (enough to amortise rayon's task cost).
@@ -34,6 +36,64 @@ pub const PARTICLES_PER_THREAD: usize = 1200;
 /// is chunked by size alone), only the wall time does.
 pub fn useful_threads(particles: usize, available: usize) -> usize {
     (particles / PARTICLES_PER_THREAD).clamp(1, available.max(1))
+}
+
+/// Most chunks a [`counting_sort`] splits its items into: its per-chunk counters grow with
+/// chunks × keys.
+const SORT_CHUNKS: usize = 16;
+
+/// A stable counting sort, in parallel: every item i < n emits up to `K` (key, value) pairs
+/// (key `u32::MAX` emits nothing); afterwards the values of key k are
+/// `values[start[k]..start[k + 1]]`, in increasing item order (and emission order within an item),
+/// whatever the thread count. Per-chunk counts, a prefix over (key, chunk), then each chunk places
+/// its values at its own offsets (atomic stores, relaxed: the positions are disjoint and the
+/// join orders them before any read). `counts` is scratch; nothing is allocated once warmed up.
+pub(crate) fn counting_sort<const K: usize>(
+    n: usize,
+    keys: usize,
+    emit: impl Fn(usize) -> [(u32, u32); K] + Sync,
+    start: &mut Vec<u32>,
+    values: &mut Vec<AtomicU32>,
+    counts: &mut Vec<u32>,
+) {
+    let chunk = chunk_len(n).max(n.div_ceil(SORT_CHUNKS)).max(1);
+    let chunks = n.div_ceil(chunk);
+    counts.clear();
+    counts.resize(chunks * keys, 0);
+    counts.par_chunks_mut(keys.max(1)).enumerate().for_each(|(c, h)| {
+        for i in c * chunk..n.min((c + 1) * chunk) {
+            for (key, _) in emit(i) {
+                if key != u32::MAX {
+                    h[key as usize] += 1;
+                }
+            }
+        }
+    });
+    start.clear();
+    start.resize(keys + 1, 0);
+    let mut at = 0u32;
+    for k in 0..keys {
+        start[k] = at;
+        for c in 0..chunks {
+            let count = counts[c * keys + k];
+            counts[c * keys + k] = at;
+            at += count;
+        }
+    }
+    start[keys] = at;
+    values.resize_with(at as usize, || AtomicU32::new(0));
+    let values = &values[..];
+    counts.par_chunks_mut(keys.max(1)).enumerate().for_each(|(c, next)| {
+        for i in c * chunk..n.min((c + 1) * chunk) {
+            for (key, value) in emit(i) {
+                if key != u32::MAX {
+                    let slot = &mut next[key as usize];
+                    values[*slot as usize].store(value, Ordering::Relaxed);
+                    *slot += 1;
+                }
+            }
+        }
+    });
 }
 
 /// Σ_{i<n} f(i), bit-identical for every thread count.

@@ -15,6 +15,7 @@
 //! A [`Scheme`] only orders stages 3–6 (see [`Solver::step`]).
 
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, AtomicU32};
 
 use mpm_constitutive::{ConstitutiveModel, SymTensor};
 use mpm_contact::Boundary;
@@ -151,10 +152,33 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) gradients: Vec<[Vector; N]>,
     /// The active nodes.
     pub(crate) active: ActiveNodes,
-    /// Node → (particle, slot) lists in compressed rows: entries of node i are
-    /// `entry[start[i]..start[i + 1]]`, each `p * N + k`, in increasing particle order.
-    pub(crate) start: Vec<u32>,
-    pub(crate) entry: Vec<u32>,
+    /// Particles binned by the 8 × 8 node block holding their stencil's first node, in
+    /// increasing particle order: bin b is `bin_particle[bin_start[b]..bin_start[b + 1]]`.
+    pub(crate) bin_start: Vec<u32>,
+    pub(crate) bin_particle: Vec<AtomicU32>,
+    /// Each particle's first stencil node, as a place in its block's patch (`p2g.rs`).
+    pub(crate) base: Vec<u8>,
+    /// Each active node's block rank and place in that block's patch.
+    pub(crate) node_block: Vec<u32>,
+    pub(crate) node_local: Vec<u8>,
+    /// Each block's neighbours below-left, below and left (`u32::MAX` where inactive): the
+    /// blocks whose patches overlap it.
+    pub(crate) neighbours: Vec<[u32; 3]>,
+    /// Per-block patches of partial particle-to-grid sums (`p2g.rs`).
+    pub(crate) patch_mass: Vec<Real>,
+    pub(crate) patch_momentum: Vec<Vector>,
+    pub(crate) patch_force: Vec<Vector>,
+    /// Which active nodes some stencil holds (the binning's check that the set is unchanged).
+    pub(crate) referenced: Vec<AtomicBool>,
+    /// Scratch of the counting sorts (`par::counting_sort`).
+    pub(crate) sort_counts: Vec<u32>,
+    /// Under surface contact, the (particle, slot) entries `p * N + k` of each boundary node
+    /// in increasing particle order: those of `boundary[b]` are
+    /// `contact_entry[contact_start[b]..contact_start[b + 1]]`.
+    pub(crate) contact_start: Vec<u32>,
+    pub(crate) contact_entry: Vec<AtomicU32>,
+    /// Position in `boundary` of each active node under surface contact, else `u32::MAX`.
+    pub(crate) boundary_of: Vec<u32>,
     /// m_i.
     pub(crate) mass: Vec<Real>,
     /// v_i (from P2G, then the MUSL remap).
@@ -173,8 +197,6 @@ pub(crate) struct Scratch<const N: usize> {
     /// its current position into `node_ids`, `weights` and `gradients`; `None` makes `locate`
     /// compute them.
     pub(crate) stencils_ahead: Option<Ahead>,
-    /// x_i of the active nodes (APIC only; empty under FLIP).
-    pub(crate) node_position: Vec<Vector>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
     pub(crate) saved: Vec<Vector>,
     /// (node, plane normal) of every plane that pushed on a node in this step's grid solve
@@ -195,14 +217,25 @@ impl<const N: usize> Scratch<N> {
             weights: Vec::new(),
             gradients: Vec::new(),
             active: ActiveNodes::new(),
-            start: Vec::new(),
-            entry: Vec::new(),
+            bin_start: Vec::new(),
+            bin_particle: Vec::new(),
+            base: Vec::new(),
+            node_block: Vec::new(),
+            node_local: Vec::new(),
+            neighbours: Vec::new(),
+            patch_mass: Vec::new(),
+            patch_momentum: Vec::new(),
+            patch_force: Vec::new(),
+            referenced: Vec::new(),
+            sort_counts: Vec::new(),
+            contact_start: Vec::new(),
+            contact_entry: Vec::new(),
+            boundary_of: Vec::new(),
             mass: Vec::new(),
             velocity: Vec::new(),
             force: Vec::new(),
             acceleration: Vec::new(),
             boundary: Vec::new(),
-            node_position: Vec::new(),
             located: false,
             stencils_ahead: None,
             saved: Vec::new(),
@@ -221,13 +254,25 @@ impl<const N: usize> Scratch<N> {
             + self.weights.capacity() * size_of::<[Real; N]>()
             + self.gradients.capacity() * size_of::<[Vector; N]>()
             + self.active.len() * (size_of::<NodeId>() + 8)
-            + (self.start.capacity() + self.entry.capacity()) * size_of::<u32>()
+            + (self.bin_start.capacity()
+                + self.bin_particle.capacity()
+                + self.sort_counts.capacity()
+                + self.node_block.capacity()
+                + self.contact_start.capacity()
+                + self.contact_entry.capacity()
+                + self.boundary_of.capacity())
+                * size_of::<u32>()
+            + self.base.capacity()
+            + self.node_local.capacity()
+            + self.referenced.capacity()
+            + self.neighbours.capacity() * size_of::<[u32; 3]>()
+            + self.patch_mass.capacity() * size_of::<Real>()
+            + (self.patch_momentum.capacity() + self.patch_force.capacity()) * size_of::<Vector>()
             + self.mass.capacity() * size_of::<Real>()
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
-            + self.node_position.capacity() * size_of::<Vector>()
     }
 }
 
@@ -635,19 +680,25 @@ pub fn estimated_bytes(
         + state_bytes
         + 2 * size_of::<u16>()
         + if apic { size_of::<Matrix>() } else { 0 }
-        // node ids, dense indices, weights, gradients, node-list entries
+        // node ids, dense indices, weights, gradients
         + stencil
             * (size_of::<NodeId>()
                 + size_of::<u32>()
                 + size_of::<Real>()
-                + size_of::<Vector>()
-                + size_of::<u32>());
+                + size_of::<Vector>())
+        // bin entry, place in the block's patch
+        + size_of::<u32>()
+        + 1;
+    // The patches hold side² partial sums per 8 × 8 block: side²/64 per node of a full block.
+    let side = crate::stages::p2g::patch_side(stencil);
+    let patch = (side * side).div_ceil(64) * (size_of::<Real>() + 2 * size_of::<Vector>());
     let per_node = size_of::<NodeId>()
         + 8
-        + size_of::<u32>()
+        // block rank, place in the patch, referenced, boundary position
+        + size_of::<u32>() + 2 + size_of::<u32>()
         + size_of::<Real>()
         + 3 * size_of::<Vector>()
-        + if apic { size_of::<Vector>() } else { 0 };
+        + patch;
     (particles as u64) * per_particle as u64 + (nodes as u64) * per_node as u64
 }
 

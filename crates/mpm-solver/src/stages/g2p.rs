@@ -13,6 +13,8 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
+use std::sync::atomic::Ordering;
+
 use rayon::prelude::*;
 
 use crate::config::Transfer;
@@ -73,7 +75,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.corrections.clear();
         for &(i, n) in &sc.held {
             let i = i as usize;
-            for &e in &sc.entry[sc.start[i] as usize..sc.start[i + 1] as usize] {
+            let b = sc.boundary_of[i] as usize;
+            for e in
+                &sc.contact_entry[sc.contact_start[b] as usize..sc.contact_start[b + 1] as usize]
+            {
+                let e = e.load(Ordering::Relaxed);
                 let (q, k) = (e as usize / N, e as usize % N);
                 let dv = sc.weights[q][k] * (sc.velocity[i] - p.velocity[q]).dot(n) * n;
                 sc.corrections.push((q as u32, dv));

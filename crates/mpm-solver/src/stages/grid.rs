@@ -13,6 +13,8 @@
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Friction, apply_all, constrain_velocity_all};
 use mpm_grid::ShapeFunctions;
+use std::sync::atomic::Ordering;
+
 use rayon::prelude::*;
 
 use crate::config::Contact;
@@ -53,20 +55,21 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let p = &self.particles;
         let surface = self.config.contact == Contact::Surface;
-        for b in &mut sc.boundary {
+        for (j, b) in sc.boundary.iter_mut().enumerate() {
             let all = (1u8 << b.count) - 1;
             if !surface {
                 b.touching = all;
                 continue;
             }
-            let i = b.node as usize;
-            let list = &sc.entry[sc.start[i] as usize..sc.start[i + 1] as usize];
+            let list =
+                &sc.contact_entry[sc.contact_start[j] as usize..sc.contact_start[j + 1] as usize];
             let mut touching = 0;
             for k in 0..usize::from(b.count) {
                 let (plane, point) = (&b.planes[k], b.points[k]);
                 let n = plane.normal();
                 let held = plane.friction() == Friction::Fixed
-                    || list.iter().any(|&e| {
+                    || list.iter().any(|e| {
+                        let e = e.load(Ordering::Relaxed);
                         let q = e as usize / N;
                         let r = 0.5 * p.volume[q].sqrt();
                         let gap =

@@ -2,19 +2,22 @@
 //!
 //! Evaluates the stencil (nodes, S_ip, G_ip) of every particle, rebuilds the sparse set of active
 //! nodes (only nodes whose support holds a particle exist), numbers each particle's nodes densely,
-//! builds the node → particle lists used by every particle-to-grid sum, and lists the active nodes
-//! that lie on a declared boundary.
+//! bins the particles by node block for the particle-to-grid sums (`p2g.rs`), and lists the active
+//! nodes that lie on a declared boundary (with, under surface contact, their particles).
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Boundary, Friction};
-use mpm_grid::{NodeId, ShapeFunctions, Stencil};
+use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, Stencil};
 use rayon::prelude::*;
 
-use crate::config::Transfer;
+use crate::config::Contact;
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::par::chunk_len;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::par::{chunk_len, counting_sort};
 use crate::solver::{BoundaryNode, Mirror, Scratch, Solver};
+use crate::stages::p2g::patch_side;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     pub(crate) fn locate(&mut self) -> Result<(), SolverError> {
@@ -22,7 +25,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &mut self.scratch;
         // The node ids of the last located step are still in `node_ids`: if no particle's stencil
         // changes its nodes (most steps: at C = 0.1 a particle needs many steps to cross a cell),
-        // the active set, its numbering (a function of the set), the node lists and the boundary
+        // the active set, its numbering (a function of the set), the bins and the boundary
         // nodes are all unchanged, and only the weights and gradients need computing.
         let reusable = sc.located && sc.node_ids.len() == n;
         let chunk = chunk_len(n);
@@ -88,14 +91,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // Most steps that change some particle's nodes change no node's membership of the active
         // set: every node is still in some stencil and no stencil reaches a new node. The set,
         // hence its numbering, the boundary nodes and the nodal arrays then stay, and only the
-        // particles' dense indices and the node lists are redone. Whether the set stayed is read
-        // off the work itself: no stencil node is missing from it, and no node's list is empty.
+        // particles' dense indices and the bins are redone. Whether the set stayed is read off
+        // the work itself: no stencil node is missing from it, and every node is in some stencil.
         // The final particle loop of the last step numbered the new nodes already (`Some(true)`)
         // or met a node outside the set (`Some(false)`: a rebuild is certain).
         let same = match numbered {
-            Some(true) => build_lists(sc),
+            Some(true) => bin_particles(sc),
             Some(false) => false,
-            None => number_stencils(sc, chunk) && build_lists(sc),
+            None => number_stencils(sc, chunk) && bin_particles(sc),
         };
         if same {
             #[cfg(test)]
@@ -111,18 +114,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.active.rebuild(sc.node_ids.iter().flatten().copied());
         let complete = number_stencils(sc, chunk);
         debug_assert!(complete, "every stencil node was inserted by the rebuild");
-        let lists = build_lists(sc);
-        debug_assert!(lists, "every active node is some stencil's node");
+        index_blocks::<N>(sc);
         let active = &sc.active;
         let nodes = active.len();
         for v in [&mut sc.velocity, &mut sc.force, &mut sc.acceleration] {
             v.resize(nodes, Vector::ZERO);
         }
         sc.mass.resize(nodes, 0.0);
-        if self.config.transfer == Transfer::Apic {
-            sc.node_position.clear();
-            sc.node_position.extend(active.nodes().iter().map(|&n| shape.node_position(n)));
-        }
 
         sc.boundary.clear();
         let b = self.config.boundaries;
@@ -173,8 +171,45 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 }
             }
         }
+        sc.boundary_of.clear();
+        sc.boundary_of.resize(nodes, u32::MAX);
+        if self.config.contact == Contact::Surface {
+            for (k, b) in sc.boundary.iter().enumerate() {
+                sc.boundary_of[b.node as usize] = k as u32;
+            }
+        }
+        let binned = bin_particles(sc);
+        debug_assert!(binned, "every active node is some stencil's node");
         Ok(())
     }
+}
+
+/// For the block scatter (`p2g.rs`): each active node's block rank and place in its block's patch,
+/// and each block's neighbours below-left, below and left (`u32::MAX` where inactive); the patches
+/// sized to the blocks.
+fn index_blocks<const N: usize>(sc: &mut Scratch<N>) {
+    let side = patch_side(N);
+    let active = &sc.active;
+    sc.node_block.clear();
+    sc.node_local.clear();
+    sc.neighbours.clear();
+    for (b, range) in active.block_ranges().enumerate() {
+        let o = active.block_origin(b);
+        for node in &active.nodes()[range] {
+            sc.node_block.push(b as u32);
+            // below BLOCK_SIDE² ≤ 64: fits a byte.
+            sc.node_local.push(((node.i - o.i) as usize + side * (node.j - o.j) as usize) as u8);
+        }
+        let rank = |di: i32, dj: i32| {
+            let n = NodeId::new(o.i + di * BLOCK_SIDE, o.j + dj * BLOCK_SIDE);
+            active.block_rank(n).map_or(u32::MAX, |r| r as u32)
+        };
+        sc.neighbours.push([rank(-1, -1), rank(0, -1), rank(-1, 0)]);
+    }
+    let cells = active.block_count() * side * side;
+    sc.patch_mass.resize(cells, 0.0);
+    sc.patch_momentum.resize(cells, Vector::ZERO);
+    sc.patch_force.resize(cells, Vector::ZERO);
 }
 
 /// puts the dense index of every stencil node into `node_index`; false when some node is not in
@@ -196,40 +231,54 @@ fn number_stencils<const N: usize>(sc: &mut Scratch<N>, chunk: usize) -> bool {
         .reduce(|| true, |a, b| a & b)
 }
 
-/// Node → (particle, slot) lists from `node_index`, by a counting sort in particle order
-/// (deterministic): entries of node i are `entry[start[i]..start[i + 1]]`, each `p * N + k`, in
-/// increasing particle order. False, with the lists left incomplete, when some active node is in
-/// no stencil. Serial: splitting the nodes into ranges that each scan every particle was slower
-/// on 2 cores (100 k particles: 6.4 against 5.1 ns per particle).
-fn build_lists<const N: usize>(sc: &mut Scratch<N>) -> bool {
+/// Bins the particles by the block of their stencil's first node, in increasing particle order
+/// (a counting sort: deterministic), records where each particle's first node lies in its block's
+/// patch, and under surface contact lists the (particle, slot) entries of every boundary node, in
+/// particle order. False, with the bins left incomplete, when some active node is in no stencil.
+fn bin_particles<const N: usize>(sc: &mut Scratch<N>) -> bool {
     let (n, nodes) = (sc.node_index.len(), sc.active.len());
-    sc.start.clear();
-    sc.start.resize(nodes + 1, 0);
-    for idx in &sc.node_index {
-        for &i in idx {
-            sc.start[i as usize + 1] += 1;
+    let chunk = chunk_len(n);
+    sc.referenced.resize_with(nodes, || AtomicBool::new(false));
+    sc.referenced.par_iter().with_min_len(4096).for_each(|r| r.store(false, Ordering::Relaxed));
+    let (referenced, node_local) = (&sc.referenced, &sc.node_local);
+    sc.base.resize(n, 0);
+    sc.base.par_chunks_mut(chunk).zip(sc.node_index.par_chunks(chunk)).for_each(|(base, ids)| {
+        for (base, idx) in base.iter_mut().zip(ids) {
+            for &i in idx {
+                referenced[i as usize].store(true, Ordering::Relaxed);
+            }
+            *base = node_local[idx[0] as usize];
         }
-    }
-    if sc.start[1..].contains(&0) {
+    });
+    if !sc.referenced.par_iter().with_min_len(4096).all(|r| r.load(Ordering::Relaxed)) {
         return false;
     }
-    for i in 0..nodes {
-        sc.start[i + 1] += sc.start[i];
+    let (index, block) = (&sc.node_index, &sc.node_block);
+    counting_sort::<1>(
+        n,
+        sc.active.block_count(),
+        |p| [(block[index[p][0] as usize], p as u32)],
+        &mut sc.bin_start,
+        &mut sc.bin_particle,
+        &mut sc.sort_counts,
+    );
+    // Under surface contact: the (particle, slot) entries `p * N + k` of each boundary node, for
+    // contact detection and the PIC normal correction (`boundary_of` marks boundary nodes only
+    // under surface contact).
+    if sc.boundary.first().is_none_or(|b| sc.boundary_of[b.node as usize] == u32::MAX) {
+        sc.contact_start.clear();
+        sc.contact_entry.clear();
+        return true;
     }
-    // `start[i + 1]` is now the end of node i's list. Filling from the last entry backwards
-    // and decrementing that end leaves each list in increasing particle order, and leaves
-    // `start[i + 1]` holding the start of list i; one shift then puts every start in place.
-    sc.entry.resize(n * N, 0);
-    let ends = &mut sc.start[1..];
-    for (p, idx) in sc.node_index.iter().enumerate().rev() {
-        for (k, &i) in idx.iter().enumerate().rev() {
-            let e = &mut ends[i as usize];
-            *e -= 1;
-            sc.entry[*e as usize] = (p * N + k) as u32;
-        }
-    }
-    sc.start.copy_within(1..=nodes, 0);
-    sc.start[nodes] = (n * N) as u32;
+    let of = &sc.boundary_of;
+    counting_sort::<N>(
+        n,
+        sc.boundary.len(),
+        |p| std::array::from_fn(|k| (of[index[p][k] as usize], (p * N + k) as u32)),
+        &mut sc.contact_start,
+        &mut sc.contact_entry,
+        &mut sc.sort_counts,
+    );
     true
 }
 

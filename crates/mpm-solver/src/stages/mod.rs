@@ -3,6 +3,6 @@
 mod g2p;
 mod grid;
 mod locate;
-mod p2g;
+pub(crate) mod p2g;
 mod stress;
 pub(crate) mod timestep;

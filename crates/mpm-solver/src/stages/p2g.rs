@@ -2,152 +2,216 @@
 //!
 //! m_i = Σ_p m_p S_ip (eq 1); q_i = Σ_p m_p v_p S_ip and v_i = q_i / m_i;
 //! f_i = −Σ_p V_p σ_p · G_ip (eq 2) + Σ_p m_p S_ip b (eq 3, b = gravity).
-//! Each node sums its own (particle, slot) list in increasing particle order, in parallel over nodes,
-//! so the sums are bit-identical for any number of threads.
+//!
+//! A block scatter with a fixed reduction order. The active nodes come in 8 × 8 blocks
+//! ([`mpm_grid::ActiveNodes`]) and `locate` bins every particle with the block that holds its
+//! stencil's first (lowest) node. Each block owns a patch of (8 + w − 1)² partial sums, w the
+//! stencil side: its own nodes plus the w − 1 rows and columns above and right of it that its
+//! particles' stencils reach. In parallel over blocks, each block zeroes its patch and adds its
+//! particles' shares in increasing particle order. Then, in parallel over nodes, each node adds
+//! the patches that hold it in a fixed order: the blocks below-left, below and left of its own
+//! block, then its own. Every sum is thus taken in an order set by the particles' positions and
+//! indices, never by the threads: the results are bit-identical for any thread count. Each
+//! particle is read once per pass (the node-list gather this replaced read it once per node)
+//! and the partial sums stay in a few kilobytes of cache.
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_grid::ShapeFunctions;
+use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_side};
+use std::sync::atomic::Ordering;
+
 use rayon::prelude::*;
 
 use crate::config::Transfer;
 use crate::math::{Real, Vector};
-use crate::particles::Particles;
-use crate::solver::Solver;
+use crate::solver::{Scratch, Solver};
 
-/// For every node i: out[i] = Σ over its entries e of `term(p, k)` with e = p·N + k.
-fn gather<T, const N: usize>(
-    start: &[u32],
-    entry: &[u32],
-    out: &mut [T],
-    term: impl Fn(usize, usize) -> T + Sync,
-) where
-    T: Send + Copy + Default + std::ops::AddAssign,
-{
-    out.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, o)| {
-        let mut acc = T::default();
-        for &e in &entry[start[i] as usize..start[i + 1] as usize] {
-            let e = e as usize;
-            acc += term(e / N, e % N);
-        }
-        *o = acc;
-    });
+/// nodes along each side of a block's patch for stencils of `n` nodes: the block's 8 and the
+/// w − 1 beyond its upper and right edges that stencils anchored in it reach.
+pub(crate) const fn patch_side(n: usize) -> usize {
+    BLOCK_SIDE as usize + stencil_side(n) - 1
 }
+
+/// the most nodes a patch can have (stencils up to 4 × 4): places in a patch fit a byte.
+const MAX_PATCH: usize = (BLOCK_SIDE as usize + 3) * (BLOCK_SIDE as usize + 3);
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// nodal mass (eq 1) and velocity q_i / m_i into `scratch.mass` and `scratch.velocity`.
     pub(crate) fn p2g_mass_velocity(&mut self) {
-        self.momentum_pass(true, 0.0);
+        match self.config.transfer {
+            Transfer::Flip => self.scatter::<true, true, false, false>(0.0, Vector::ZERO),
+            Transfer::Apic => self.scatter::<true, true, false, true>(0.0, Vector::ZERO),
+        }
     }
 
     /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
-    /// old stencils, then the boundary velocity constraint (eq 18).
+    /// old stencils, then the boundary velocity constraint (eq 18). m_i is the step's P2G mass:
+    /// the same sum over the same stencils.
     pub(crate) fn remap_velocity(&mut self, dt: Real) {
         // The stencils are the start-of-step ones, so the affine term must use the start-of-step
         // positions too: x_p − Δt v_p, exact under APIC (whose G2P moves x_p by Δt v_p).
-        self.momentum_pass(false, dt);
+        match self.config.transfer {
+            Transfer::Flip => self.scatter::<false, true, false, false>(dt, Vector::ZERO),
+            Transfer::Apic => self.scatter::<false, true, false, true>(dt, Vector::ZERO),
+        }
         self.constrain_velocity();
     }
 
-    /// mass, velocity and force in one pass over each node's list (USL and MUSL, whose force
-    /// uses the stress of the previous step): a third less memory traffic than separate passes,
-    /// and the same sums in the same order.
+    /// mass, velocity and force in one pass (USL and MUSL, whose force uses the stress of the
+    /// previous step): each particle is read once for all three sums.
     pub(crate) fn p2g_all(&mut self, dt: Real) {
-        let sc = &mut self.scratch;
-        let p = &self.particles;
-        let (w, grad) = (&sc.weights, &sc.gradients);
-        let (start, entry) = (&sc.start, &sc.entry);
-        let apic = self.config.transfer == Transfer::Apic;
-        let xi = &sc.node_position;
         let g = self.config.gravity_at(self.time + 0.5 * dt);
-        sc.mass
-            .par_iter_mut()
-            .zip(sc.velocity.par_iter_mut().zip(sc.force.par_iter_mut()))
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, (m, (v, f)))| {
-                let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
-                for &e in &entry[start[i] as usize..start[i + 1] as usize] {
-                    let (pi, k) = (e as usize / N, e as usize % N);
-                    let mw = p.mass[pi] * w[pi][k];
-                    ms += mw;
-                    q += momentum(p, pi, mw, apic, xi.get(i), 0.0);
-                    fs += force(p, pi, mw, grad[pi][k], g);
-                }
-                *m = ms;
-                *v = if ms > 0.0 { q / ms } else { Vector::ZERO };
-                *f = fs;
-            });
-    }
-
-    /// v_i = q_i / m_i with q_i = Σ_p m_p S_ip v_p (FLIP) or Σ_p m_p S_ip (v_p + C_p (x_i − x_p))
-    /// (APIC, with particle positions taken back by `dt_back` along v_p); also m_i when
-    /// `with_mass`. One pass over each node's list, in particle order.
-    fn momentum_pass(&mut self, with_mass: bool, dt_back: Real) {
-        let sc = &mut self.scratch;
-        let p = &self.particles;
-        let w = &sc.weights;
-        let (start, entry) = (&sc.start, &sc.entry);
-        let apic = self.config.transfer == Transfer::Apic;
-        let xi = &sc.node_position;
-        sc.mass
-            .par_iter_mut()
-            .zip(sc.velocity.par_iter_mut())
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, (m, v))| {
-                let (mut ms, mut q) = (0.0, Vector::ZERO);
-                for &e in &entry[start[i] as usize..start[i + 1] as usize] {
-                    let (pi, k) = (e as usize / N, e as usize % N);
-                    let mw = p.mass[pi] * w[pi][k];
-                    ms += mw;
-                    q += momentum(p, pi, mw, apic, xi.get(i), dt_back);
-                }
-                if with_mass {
-                    *m = ms;
-                }
-                // the remap divides by the same m_i: Σ m_p S_ip over the same list.
-                *v = if ms > 0.0 { q / ms } else { Vector::ZERO };
-            });
+        match self.config.transfer {
+            Transfer::Flip => self.scatter::<true, true, true, false>(0.0, g),
+            Transfer::Apic => self.scatter::<true, true, true, true>(0.0, g),
+        }
     }
 
     /// nodal force f_i^int + f_i^ext (eqs 2–3) into `scratch.force`.
     pub(crate) fn p2g_force(&mut self, dt: Real) {
-        let sc = &mut self.scratch;
-        let p = &self.particles;
-        let (w, grad) = (&sc.weights, &sc.gradients);
         // Gravity at mid-step (it only changes during a ramp).
         let g = self.config.gravity_at(self.time + 0.5 * dt);
-        gather::<_, N>(&sc.start, &sc.entry, &mut sc.force, |q, k| {
-            force(p, q, p.mass[q] * w[q][k], grad[q][k], g)
-        });
+        self.scatter::<false, false, true, false>(0.0, g);
     }
-}
 
-/// particle `q`'s share of a node's momentum, `mw` = m_q S_iq: mw v_q (FLIP), or
-/// mw (v_q + C_q (x_i − x_q)) with x_q taken back by `dt_back` along v_q (APIC).
-#[inline(always)]
-fn momentum<S>(
-    p: &Particles<S>,
-    q: usize,
-    mw: Real,
-    apic: bool,
-    node_position: Option<&Vector>,
-    dt_back: Real,
-) -> Vector {
-    match (apic, node_position) {
-        (true, Some(&xi)) => {
-            let x0 = p.position[q] - dt_back * p.velocity[q];
-            mw * (p.velocity[q] + p.affine[q] * (xi - x0))
-        }
-        _ => mw * p.velocity[q],
+    /// the block scatter of the module docs, forming m_i (`MASS`; else the stored m_i divides
+    /// the momentum), q_i and v_i = q_i / m_i (`MOMENTUM`) and f_i (`FORCE`). q_i sums
+    /// m_p S_ip v_p, or with `APIC` m_p S_ip (v_p + C_p (x_i − x_p)), the particle positions taken
+    /// back by `dt_back` along v_p; f_i sums m_p S_ip g − V_p σ_p · G_ip (eqs 2–3; tension
+    /// positive, so −V σ·G pulls nodes towards stretched regions).
+    fn scatter<const MASS: bool, const MOMENTUM: bool, const FORCE: bool, const APIC: bool>(
+        &mut self,
+        dt_back: Real,
+        g: Vector,
+    ) {
+        const { assert!(patch_side(N) * patch_side(N) <= MAX_PATCH) };
+        let side = patch_side(N);
+        let cells = side * side;
+        let w = stencil_side(N);
+        // slot k of a stencil lies k mod w, k div w nodes from its first node
+        let offset: [usize; N] = std::array::from_fn(|k| k % w + side * (k / w));
+        let shape = &self.shape;
+        let p = &self.particles;
+        let (mass, velocity, volume, stress) =
+            (&p.mass[..], &p.velocity[..], &p.volume[..], &p.stress[..]);
+        let (position, affine) = (&p.position[..], &p.affine[..]);
+        let Scratch {
+            weights,
+            gradients,
+            bin_start,
+            bin_particle,
+            base,
+            active,
+            patch_mass,
+            patch_momentum,
+            patch_force,
+            node_block,
+            node_local,
+            neighbours,
+            mass: nodal_mass,
+            velocity: nodal_velocity,
+            force: nodal_force,
+            ..
+        } = &mut self.scratch;
+        let (weights, gradients, base) = (&weights[..], &gradients[..], &base[..]);
+        patch_mass
+            .par_chunks_mut(cells)
+            .zip(patch_momentum.par_chunks_mut(cells))
+            .zip(patch_force.par_chunks_mut(cells))
+            .enumerate()
+            .for_each(|(b, ((bm, bq), bf))| {
+                let mut place = [Vector::ZERO; MAX_PATCH];
+                if MASS {
+                    bm.fill(0.0);
+                }
+                if MOMENTUM {
+                    bq.fill(Vector::ZERO);
+                }
+                if FORCE {
+                    bf.fill(Vector::ZERO);
+                }
+                if APIC {
+                    let o = active.block_origin(b);
+                    for (c, x) in place[..cells].iter_mut().enumerate() {
+                        let node = NodeId::new(o.i + (c % side) as i32, o.j + (c / side) as i32);
+                        *x = shape.node_position(node);
+                    }
+                }
+                let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
+                for q in bin {
+                    let q = q.load(Ordering::Relaxed) as usize;
+                    let at = usize::from(base[q]);
+                    let (m, v, wq, gq) = (mass[q], velocity[q], &weights[q], &gradients[q]);
+                    let (vol, s) = (volume[q], stress[q]);
+                    let (c_q, x0) = if APIC {
+                        (affine[q], position[q] - dt_back * v)
+                    } else {
+                        Default::default()
+                    };
+                    for k in 0..N {
+                        let c = at + offset[k];
+                        let mw = m * wq[k];
+                        if MASS {
+                            bm[c] += mw;
+                        }
+                        if MOMENTUM {
+                            bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
+                        }
+                        if FORCE {
+                            let gr = gq[k];
+                            let sigma_g =
+                                Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
+                            bf[c] += mw * g - vol * sigma_g;
+                        }
+                    }
+                }
+            });
+        let (pm, pq, pf) = (&patch_mass[..], &patch_momentum[..], &patch_force[..]);
+        let edge = w - 1;
+        let block = BLOCK_SIDE as usize;
+        nodal_mass
+            .par_iter_mut()
+            .zip(nodal_velocity.par_iter_mut().zip(nodal_force.par_iter_mut()))
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (m, (v, f)))| {
+                let b = node_block[i] as usize;
+                let c = usize::from(node_local[i]);
+                let (ci, cj) = (c % side, c / side);
+                let [below_left, below, left] = neighbours[b];
+                let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
+                let mut add = |src: u32, at: usize| {
+                    if src != u32::MAX {
+                        let at = src as usize * cells + at;
+                        if MASS {
+                            ms += pm[at];
+                        }
+                        if MOMENTUM {
+                            q += pq[at];
+                        }
+                        if FORCE {
+                            fs += pf[at];
+                        }
+                    }
+                };
+                if ci < edge && cj < edge {
+                    add(below_left, c + block + side * block);
+                }
+                if cj < edge {
+                    add(below, c + side * block);
+                }
+                if ci < edge {
+                    add(left, c + block);
+                }
+                add(b as u32, c);
+                if MASS {
+                    *m = ms;
+                }
+                if MOMENTUM {
+                    *v = if *m > 0.0 { q / *m } else { Vector::ZERO };
+                }
+                if FORCE {
+                    *f = fs;
+                }
+            });
     }
-}
-
-/// particle `q`'s share of a node's force: m_q S_iq b − V_q σ_q · G_iq (eqs 2–3). Tension
-/// positive, so −V σ·G pulls nodes towards stretched regions.
-#[inline(always)]
-fn force<S>(p: &Particles<S>, q: usize, mw: Real, gr: Vector, g: Vector) -> Vector {
-    let s = &p.stress[q];
-    let sigma_g = Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
-    mw * g - p.volume[q] * sigma_g
 }
