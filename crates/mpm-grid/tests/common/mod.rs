@@ -41,6 +41,12 @@ pub fn check_identities<const N: usize, S: ShapeFunctions<N>>(
     cell: f64,
 ) -> Result<(), TestCaseError> {
     let s = sf.stencil(p).map_err(|e| TestCaseError::fail(format!("{e}")))?;
+    // The layout solvers scatter by: slot k is node 0 shifted by (k mod w, k div w).
+    let w = mpm_grid::stencil_side(N);
+    for (k, n) in s.nodes.iter().enumerate() {
+        let expected = NodeId::new(s.nodes[0].i + (k % w) as i32, s.nodes[0].j + (k / w) as i32);
+        prop_assert_eq!(*n, expected, "slot {} out of the tensor-product layout", k);
+    }
     for a in 0..N {
         for b in a + 1..N {
             prop_assert_ne!(s.nodes[a], s.nodes[b], "duplicate node");
