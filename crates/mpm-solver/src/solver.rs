@@ -3,7 +3,7 @@
 //! One step (SPEC §1) runs these stages, each written once in `stages/`:
 //! 1. **time step** (`timestep.rs`): Δt from the Courant number and the fastest signal (eq 13);
 //! 2. **locate** (`locate.rs`): stencils S_ip, G_ip of every particle, the sparse active-node set,
-//!    the node → particle lists that make particle-to-grid sums deterministic, the boundary nodes;
+//!    the particle bins that make particle-to-grid sums deterministic, the boundary nodes;
 //! 3. **particle to grid** (`p2g.rs`): nodal mass (eq 1), velocity, internal and external force
 //!    (eqs 2–3), and the MUSL remap of velocity (eq 8);
 //! 4. **grid solve** (`grid.rs`): nodal acceleration (eq 4), small-mass nodes, boundary contact
@@ -663,9 +663,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 /// heap bytes a running solver of `particles` particles, `nodes` active nodes, stencils of
 /// `stencil` nodes, a constitutive state of `state_bytes` bytes and (with `apic`) affine
-/// matrices holds: what [`Solver::heap_bytes`] reports once it runs, computed without
-/// building it, so that a front end can refuse a scene that does not fit in memory before
-/// allocating anything.
+/// matrices holds: about what [`Solver::heap_bytes`] reports once it runs (the patches of
+/// partial sums are charged for blocks half full of nodes), computed without building it, so
+/// that a front end can refuse a scene that does not fit in memory before allocating anything.
 pub fn estimated_bytes(
     particles: usize,
     nodes: usize,
@@ -689,16 +689,18 @@ pub fn estimated_bytes(
         // bin entry, place in the block's patch
         + size_of::<u32>()
         + 1;
-    // The patches hold side² partial sums per 8 × 8 block: side²/64 per node of a full block.
-    let side = crate::stages::p2g::patch_side(stencil);
-    let patch = (side * side).div_ceil(64) * (size_of::<Real>() + 2 * size_of::<Vector>());
+    // Each 8 × 8 block holds a patch of side² partial sums whatever its fill, plus its bin
+    // start, neighbours and sort counters: charged per node as if blocks were half full (a
+    // full block costs half this, a thin strip of material more).
+    let side = 8 + (1..=stencil).find(|w| w * w >= stencil).unwrap_or(1) - 1;
+    let per_block = side * side * (size_of::<Real>() + 2 * size_of::<Vector>()) + 20 + 64;
     let per_node = size_of::<NodeId>()
         + 8
         // block rank, place in the patch, referenced, boundary position
         + size_of::<u32>() + 2 + size_of::<u32>()
         + size_of::<Real>()
         + 3 * size_of::<Vector>()
-        + patch;
+        + per_block.div_ceil(32);
     (particles as u64) * per_particle as u64 + (nodes as u64) * per_node as u64
 }
 

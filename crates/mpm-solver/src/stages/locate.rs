@@ -197,7 +197,7 @@ fn index_blocks<const N: usize>(sc: &mut Scratch<N>) {
         let o = active.block_origin(b);
         for node in &active.nodes()[range] {
             sc.node_block.push(b as u32);
-            // below BLOCK_SIDE² ≤ 64: fits a byte.
+            // ci + side·cj < MAX_PATCH ≤ 121 (`p2g.rs`): fits a byte.
             sc.node_local.push(((node.i - o.i) as usize + side * (node.j - o.j) as usize) as u8);
         }
         let rank = |di: i32, dj: i32| {
@@ -283,7 +283,7 @@ fn bin_particles<const N: usize>(sc: &mut Scratch<N>) -> bool {
 }
 
 /// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
-/// held (their dense indices and the node lists must then be redone). Used by `locate` and, for
+/// held (their dense indices and the bins must then be redone). Used by `locate` and, for
 /// the stencils computed ahead, by the stress update.
 #[inline(always)]
 pub(crate) fn store<const N: usize>(

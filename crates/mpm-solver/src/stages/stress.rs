@@ -206,7 +206,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if last {
             self.next_signal = Some(signal);
             if !outside {
-                // With changed node ids the node lists (and, where a node was missing, the
+                // With changed node ids the bins (and, where a node was missing, the
                 // active set) are stale until `locate` redoes them, whatever happens to
                 // `stencils_ahead` in between.
                 self.scratch.located = !changed;
