@@ -15,7 +15,7 @@
 //! particle is read once per pass (the node-list gather this replaced read it once per node)
 //! and the partial sums stay in a few kilobytes of cache.
 
-use mpm_constitutive::ConstitutiveModel;
+use mpm_constitutive::{ConstitutiveModel, SymTensor};
 use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_side};
 use std::sync::atomic::Ordering;
 
@@ -157,10 +157,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
                         }
                         if FORCE {
-                            let gr = gq[k];
-                            let sigma_g =
-                                Vector::new(s.xx * gr.x + s.xy * gr.y, s.xy * gr.x + s.yy * gr.y);
-                            bf[c] += mw * g - vol * sigma_g;
+                            bf[c] += mw * g - vol * in_plane(&s, gq[k]);
                         }
                     }
                 }
@@ -214,6 +211,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 }
             });
     }
+}
+
+/// σ·G in the plane of the analysis (plane strain: σ_zz does not act on an in-plane gradient).
+#[inline(always)]
+fn in_plane(s: &SymTensor, g: Vector) -> Vector {
+    Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y)
 }
 
 #[cfg(test)]
@@ -283,7 +286,7 @@ mod tests {
                         }
                     };
                     let s_ = &p.stress[i];
-                    let sg = Vector::new(s_.xx * gr.x + s_.xy * gr.y, s_.xy * gr.x + s_.yy * gr.y);
+                    let sg = super::in_plane(s_, gr);
                     m[n] += mw;
                     q[n] += mw * v;
                     f[n] += mw * g - p.volume[i] * sg;
