@@ -45,8 +45,9 @@ impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
         let (w, na, nb) = unit_square(loc.a, loc.b);
         let (inv_l, inv_h) = g.inverse_sizes();
         let db_dx = loc.db_dx;
-        let gradients =
-            [0, 1, 2, 3].map(|k| Vector::new(na[k] * inv_l + nb[k] * db_dx, nb[k] * inv_h));
+        let grad = |k: usize| Vector::new(na[k] * inv_l + nb[k] * db_dx, nb[k] * inv_h);
+        // Written out: `[0, 1, 2, 3].map(..)` compiled to an out-of-line call per stencil.
+        let gradients = [grad(0), grad(1), grad(2), grad(3)];
         Ok(Stencil { nodes: corner_nodes(loc.i as i32, loc.j as i32), weights: w, gradients })
     }
 
@@ -70,7 +71,9 @@ impl ShapeFunctions<4> for Bilinear<RegularGrid> {
         let (i, j, a, b) = g.cell_of_units(g.units_of(x)?);
         let (w, na, nb) = unit_square(a, b);
         let inv = g.inverse_cell_size();
-        let gradients = [0, 1, 2, 3].map(|k| Vector::new(na[k] * inv.x, nb[k] * inv.y));
+        let grad = |k: usize| Vector::new(na[k] * inv.x, nb[k] * inv.y);
+        // Written out: `[0, 1, 2, 3].map(..)` compiled to an out-of-line call per stencil.
+        let gradients = [grad(0), grad(1), grad(2), grad(3)];
         Ok(Stencil { nodes: corner_nodes(i, j), weights: w, gradients })
     }
 

@@ -70,7 +70,7 @@ pub use math::{Matrix, Real, Vector};
 pub use node::{BoundaryNormals, CellCoords, NodeId};
 pub use regular::RegularGrid;
 pub use skewed_cell::SkewedCell;
-pub use stencil::{ShapeFunctions, Stencil, stencil_side};
+pub use stencil::{ShapeFunctions, Stencil, stencil_nodes, stencil_side};
 pub use terrain::{
     AdjacentSegments, GroundSegment, KINK_TOLERANCE, KinkPolicy, TerrainGrid, TerrainGridSpec,
 };

@@ -41,6 +41,15 @@ pub const fn stencil_side(n: usize) -> usize {
     w
 }
 
+/// the nodes of the `N`-node stencil whose first (lowest) node is `first`, in slot order: slot k
+/// is `first` + (k mod w, k div w), w = [`stencil_side`]`(N)` (the layout every [`Stencil`]
+/// keeps). A solver may thus store a stencil's first node alone.
+#[inline(always)]
+pub fn stencil_nodes<const N: usize>(first: NodeId) -> [NodeId; N] {
+    let w = stencil_side(N);
+    std::array::from_fn(|k| NodeId::new(first.i + (k % w) as i32, first.j + (k / w) as i32))
+}
+
 /// One interface over every grid + shape-function pair (no allocation, no dyn).
 ///
 /// `N` is the stencil size: 4 for bilinear, 9 for uGIMP and quadratic B-splines.

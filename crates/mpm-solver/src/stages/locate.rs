@@ -7,7 +7,7 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Boundary, Friction};
-use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, Stencil};
+use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, Stencil, stencil_nodes};
 use rayon::prelude::*;
 
 use crate::config::Contact;
@@ -23,13 +23,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     pub(crate) fn locate(&mut self) -> Result<(), SolverError> {
         let n = self.particles.len();
         let sc = &mut self.scratch;
-        // The node ids of the last located step are still in `node_ids`: if no particle's stencil
+        // The node ids of the last located step are still in `first_node`: if no particle's stencil
         // changes its nodes (most steps: at C = 0.1 a particle needs many steps to cross a cell),
         // the active set, its numbering (a function of the set), the bins and the boundary
         // nodes are all unchanged, and only the weights and gradients need computing.
-        let reusable = sc.located && sc.node_ids.len() == n;
+        let reusable = sc.located && sc.first_node.len() == n;
         let chunk = chunk_len(n);
-        sc.node_ids.resize(n, [Default::default(); N]);
+        sc.first_node.resize(n, NodeId::default());
         sc.weights.resize(n, [0.0; N]);
         sc.gradients.resize(n, [Vector::ZERO; N]);
 
@@ -43,17 +43,17 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // its first failing particle, so the error names the same particle for any
                 // thread count.
                 let failure = sc
-                    .node_ids
+                    .first_node
                     .par_chunks_mut(chunk)
                     .zip(sc.weights.par_chunks_mut(chunk))
                     .zip(sc.gradients.par_chunks_mut(chunk))
                     .enumerate()
-                    .map(|(c, ((ids, w), g))| {
+                    .map(|(c, ((first, w), g))| {
                         let mut changed = false;
-                        for j in 0..ids.len() {
+                        for j in 0..first.len() {
                             let p = c * chunk + j;
                             match shape.stencil(positions[p]) {
-                                Ok(s) => changed |= store(s, &mut ids[j], &mut w[j], &mut g[j]),
+                                Ok(s) => changed |= store(s, &mut first[j], &mut w[j], &mut g[j]),
                                 Err(cause) => return Err((p, cause)),
                             }
                         }
@@ -111,7 +111,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         {
             sc.paths[2] += 1;
         }
-        sc.active.rebuild(sc.node_ids.iter().flatten().copied());
+        sc.active.rebuild(sc.first_node.iter().flat_map(|&f| stencil_nodes::<N>(f)));
         let complete = number_stencils(sc, chunk);
         debug_assert!(complete, "every stencil node was inserted by the rebuild");
         index_blocks::<N>(sc);
@@ -216,14 +216,14 @@ fn index_blocks<const N: usize>(sc: &mut Scratch<N>) {
 /// the active set (its index is then `u32::MAX`).
 fn number_stencils<const N: usize>(sc: &mut Scratch<N>, chunk: usize) -> bool {
     let active = &sc.active;
-    sc.node_index.resize(sc.node_ids.len(), [0; N]);
+    sc.node_index.resize(sc.first_node.len(), [0; N]);
     sc.node_index
         .par_chunks_mut(chunk)
-        .zip(sc.node_ids.par_chunks(chunk))
-        .map(|(idx, ids)| {
+        .zip(sc.first_node.par_chunks(chunk))
+        .map(|(idx, first)| {
             let mut complete = true;
-            for (idx, ids) in idx.iter_mut().zip(ids) {
-                *idx = active.indices_of(ids);
+            for (idx, &first) in idx.iter_mut().zip(first) {
+                *idx = active.indices_of(&stencil_nodes::<N>(first));
                 complete &= !idx.contains(&u32::MAX);
             }
             complete
@@ -284,18 +284,20 @@ fn bin_particles<const N: usize>(sc: &mut Scratch<N>) -> bool {
 
 /// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
 /// held (their dense indices and the bins must then be redone). Used by `locate` and, for
-/// the stencils computed ahead, by the stress update.
+/// the stencils computed ahead, by the stress update. Only the first node is kept: a stencil's
+/// nodes follow from it (the slot layout of [`Stencil`]), so they change exactly when it does.
 #[inline(always)]
 pub(crate) fn store<const N: usize>(
     s: Stencil<N>,
-    ids: &mut [NodeId; N],
+    first: &mut NodeId,
     weights: &mut [Real; N],
     gradients: &mut [Vector; N],
 ) -> bool {
-    let changed = *ids != s.nodes;
+    debug_assert_eq!(s.nodes, stencil_nodes::<N>(s.nodes[0]), "a tensor-product stencil");
+    let changed = *first != s.nodes[0];
     if changed {
         // (most steps keep a particle's nodes: no write then)
-        *ids = s.nodes;
+        *first = s.nodes[0];
     }
     *weights = s.weights;
     *gradients = s.gradients;

@@ -10,7 +10,7 @@
 
 use glam::{DMat3, DVec3};
 use mpm_constitutive::{ConstitutiveModel, Surface, SymTensor};
-use mpm_grid::ShapeFunctions;
+use mpm_grid::{ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
 use crate::config::{Scheme, Transfer};
@@ -94,12 +94,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .par_chunks_mut(chunk)
             .zip(p.state.par_chunks_mut(chunk))
             .zip(p.volume.par_chunks_mut(chunk))
-            .zip(sc.node_ids.par_chunks_mut(chunk))
+            .zip(sc.first_node.par_chunks_mut(chunk))
             .zip(sc.node_index.par_chunks_mut(chunk))
             .zip(sc.weights.par_chunks_mut(chunk))
             .zip(sc.gradients.par_chunks_mut(chunk))
             .enumerate()
-            .map(|(c, ((((((stress, state), volume), ids), idx), weights), grads))| {
+            .map(|(c, ((((((stress, state), volume), first), idx), weights), grads))| {
                 let mut tally = ChunkTally::default();
                 for j in 0..stress.len() {
                     let q = c * chunk + j;
@@ -118,11 +118,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         // the next step's stencil, at the final position (`locate.rs`).
                         match shape.stencil(position[q]) {
                             Ok(s) => {
-                                if store(s, &mut ids[j], &mut weights[j], &mut grads[j]) {
+                                if store(s, &mut first[j], &mut weights[j], &mut grads[j]) {
                                     // its dense indices in the current active set, which
                                     // `locate` keeps unless some node joins or leaves it.
                                     tally.changed = true;
-                                    idx[j] = active.indices_of(&ids[j]);
+                                    idx[j] = active.indices_of(&stencil_nodes::<N>(first[j]));
                                     tally.missing |= idx[j].contains(&u32::MAX);
                                 }
                             }
