@@ -17,7 +17,7 @@ use crate::error::LocateError;
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
-use crate::stencil::{ShapeFunctions, Stencil};
+use crate::stencil::ShapeFunctions;
 use crate::terrain::TerrainGrid;
 
 /// Bilinear isoparametric shape functions over grid `G` (a [`TerrainGrid`] or a
@@ -25,30 +25,50 @@ use crate::terrain::TerrainGrid;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bilinear<G>(pub G);
 
-/// weights and (∂N/∂a, ∂N/∂b) of the four corners at fractions (a, b).
+/// the weights of the four corners at fractions (a, b).
 #[inline(always)]
-fn unit_square(a: f64, b: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+fn unit_square(a: f64, b: f64) -> [f64; 4] {
     let (am, bm) = (1.0 - a, 1.0 - b);
-    ([am * bm, a * bm, am * b, a * b], [-bm, bm, -b, b], [-am, -a, am, a])
+    [am * bm, a * bm, am * b, a * b]
 }
 
+/// (∂N/∂a, ∂N/∂b) of the four corners at fractions (a, b).
 #[inline(always)]
-fn corner_nodes(i: i32, j: i32) -> [NodeId; 4] {
-    [NodeId::new(i, j), NodeId::new(i + 1, j), NodeId::new(i, j + 1), NodeId::new(i + 1, j + 1)]
+fn unit_square_slopes(a: f64, b: f64) -> ([f64; 4], [f64; 4]) {
+    let (am, bm) = (1.0 - a, 1.0 - b);
+    ([-bm, bm, -b, b], [-am, -a, am, a])
+}
+
+/// A point's fractions (a, b) across its terrain cell and the column's ∂b/∂x.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TerrainFactors {
+    a: f64,
+    b: f64,
+    db_dx: f64,
 }
 
 impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
+    type Factors = TerrainFactors;
+
     #[inline(always)]
-    fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
-        let g = &self.0;
-        let loc = g.locate_parts(x)?;
-        let (w, na, nb) = unit_square(loc.a, loc.b);
-        let (inv_l, inv_h) = g.inverse_sizes();
-        let db_dx = loc.db_dx;
-        let grad = |k: usize| Vector::new(na[k] * inv_l + nb[k] * db_dx, nb[k] * inv_h);
+    fn factors(&self, x: Vector) -> Result<(NodeId, TerrainFactors), LocateError> {
+        let loc = self.0.locate_parts(x)?;
+        let f = TerrainFactors { a: loc.a, b: loc.b, db_dx: loc.db_dx };
+        Ok((NodeId::new(loc.i as i32, loc.j as i32), f))
+    }
+
+    #[inline(always)]
+    fn weights(&self, f: &TerrainFactors) -> [f64; 4] {
+        unit_square(f.a, f.b)
+    }
+
+    #[inline(always)]
+    fn gradients(&self, f: &TerrainFactors) -> [Vector; 4] {
+        let (na, nb) = unit_square_slopes(f.a, f.b);
+        let (inv_l, inv_h) = self.0.inverse_sizes();
+        let grad = |k: usize| Vector::new(na[k] * inv_l + nb[k] * f.db_dx, nb[k] * inv_h);
         // Written out: `[0, 1, 2, 3].map(..)` compiled to an out-of-line call per stencil.
-        let gradients = [grad(0), grad(1), grad(2), grad(3)];
-        Ok(Stencil { nodes: corner_nodes(loc.i as i32, loc.j as i32), weights: w, gradients })
+        [grad(0), grad(1), grad(2), grad(3)]
     }
 
     fn node_position(&self, node: NodeId) -> Vector {
@@ -65,16 +85,27 @@ impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
 }
 
 impl ShapeFunctions<4> for Bilinear<RegularGrid> {
+    /// the point's fractions (a, b) across its cell.
+    type Factors = [f64; 2];
+
     #[inline(always)]
-    fn stencil(&self, x: Vector) -> Result<Stencil<4>, LocateError> {
+    fn factors(&self, x: Vector) -> Result<(NodeId, [f64; 2]), LocateError> {
         let g = &self.0;
         let (i, j, a, b) = g.cell_of_units(g.units_of(x)?);
-        let (w, na, nb) = unit_square(a, b);
-        let inv = g.inverse_cell_size();
+        Ok((NodeId::new(i, j), [a, b]))
+    }
+
+    #[inline(always)]
+    fn weights(&self, &[a, b]: &[f64; 2]) -> [f64; 4] {
+        unit_square(a, b)
+    }
+
+    #[inline(always)]
+    fn gradients(&self, &[a, b]: &[f64; 2]) -> [Vector; 4] {
+        let (na, nb) = unit_square_slopes(a, b);
+        let inv = self.0.inverse_cell_size();
         let grad = |k: usize| Vector::new(na[k] * inv.x, nb[k] * inv.y);
-        // Written out: `[0, 1, 2, 3].map(..)` compiled to an out-of-line call per stencil.
-        let gradients = [grad(0), grad(1), grad(2), grad(3)];
-        Ok(Stencil { nodes: corner_nodes(i, j), weights: w, gradients })
+        [grad(0), grad(1), grad(2), grad(3)]
     }
 
     fn node_position(&self, node: NodeId) -> Vector {

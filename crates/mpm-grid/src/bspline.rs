@@ -24,11 +24,11 @@
 //! - units SI (m).
 
 use crate::error::LocateError;
-use crate::gimp::tensor3;
+use crate::gimp::AxisFactors;
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
-use crate::stencil::{ShapeFunctions, Stencil};
+use crate::stencil::ShapeFunctions;
 
 /// Quadratic B-spline shape functions on a regular grid: [`ShapeFunctions<9>`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,12 +59,22 @@ fn bspline_axis(u: f64) -> (i32, [(f64, f64); 3]) {
 }
 
 impl ShapeFunctions<9> for QuadraticBSpline {
+    type Factors = AxisFactors;
+
     #[inline(always)]
-    fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
+    fn factors(&self, x: Vector) -> Result<(NodeId, AxisFactors), LocateError> {
         let u = self.grid.units_of(x)?;
-        let (cx, wx) = bspline_axis(u.x);
-        let (cy, wy) = bspline_axis(u.y);
-        Ok(tensor3(cx, cy, wx, wy, self.grid.inverse_cell_size()))
+        Ok(AxisFactors::centred(bspline_axis(u.x), bspline_axis(u.y)))
+    }
+
+    #[inline(always)]
+    fn weights(&self, f: &AxisFactors) -> [f64; 9] {
+        f.weights()
+    }
+
+    #[inline(always)]
+    fn gradients(&self, f: &AxisFactors) -> [Vector; 9] {
+        f.gradients(self.grid.inverse_cell_size())
     }
 
     fn node_position(&self, node: NodeId) -> Vector {

@@ -29,7 +29,7 @@ use crate::error::{GridError, LocateError};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
-use crate::stencil::{ShapeFunctions, Stencil};
+use crate::stencil::ShapeFunctions;
 
 /// uGIMP shape functions on a regular grid: [`ShapeFunctions<9>`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,35 +129,57 @@ fn gimp_axis(u: f64, axis: &GimpAxis) -> (i32, [(f64, f64); 3]) {
     (c, [axis.weight(1.0 + d), axis.weight(d), axis.weight(d - 1.0)])
 }
 
-/// assembles a 3×3 tensor-product stencil from per-axis (weight, d/du) triples.
-#[inline(always)]
-pub(crate) fn tensor3(
-    cx: i32,
-    cy: i32,
-    wx: [(f64, f64); 3],
-    wy: [(f64, f64); 3],
-    inv_cell: Vector,
-) -> Stencil<9> {
-    let mut s =
-        Stencil { nodes: [NodeId::default(); 9], weights: [0.0; 9], gradients: [Vector::ZERO; 9] };
-    for (b, &(sy, dy)) in wy.iter().enumerate() {
-        for (a, &(sx, dx)) in wx.iter().enumerate() {
-            let k = 3 * b + a;
-            s.nodes[k] = NodeId::new(cx - 1 + a as i32, cy - 1 + b as i32);
-            s.weights[k] = sx * sy;
-            s.gradients[k] = Vector::new(dx * sy * inv_cell.x, sx * dy * inv_cell.y);
-        }
+/// The 1D (weight, d/du) pairs of a 3 × 3 tensor-product stencil along x and along y, for
+/// nodes c − 1, c, c + 1 of each axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AxisFactors {
+    x: [(f64, f64); 3],
+    y: [(f64, f64); 3],
+}
+
+impl AxisFactors {
+    /// the factors of the stencil centred on node (cx, cy): its first node and the pairs.
+    #[inline(always)]
+    pub(crate) fn centred(
+        (cx, x): (i32, [(f64, f64); 3]),
+        (cy, y): (i32, [(f64, f64); 3]),
+    ) -> (NodeId, Self) {
+        (NodeId::new(cx - 1, cy - 1), Self { x, y })
     }
-    s
+
+    /// the tensor-product weights, slot k = 3 b + a for node (a, b) of the 3 × 3.
+    #[inline(always)]
+    pub(crate) fn weights(&self) -> [f64; 9] {
+        std::array::from_fn(|k| self.x[k % 3].0 * self.y[k / 3].0)
+    }
+
+    /// the tensor-product gradients (1/m) with cell units scaled by `inv_cell`.
+    #[inline(always)]
+    pub(crate) fn gradients(&self, inv_cell: Vector) -> [Vector; 9] {
+        std::array::from_fn(|k| {
+            let ((sx, dx), (sy, dy)) = (self.x[k % 3], self.y[k / 3]);
+            Vector::new(dx * sy * inv_cell.x, sx * dy * inv_cell.y)
+        })
+    }
 }
 
 impl ShapeFunctions<9> for Gimp {
+    type Factors = AxisFactors;
+
     #[inline(always)]
-    fn stencil(&self, x: Vector) -> Result<Stencil<9>, LocateError> {
+    fn factors(&self, x: Vector) -> Result<(NodeId, AxisFactors), LocateError> {
         let u = self.grid.units_of(x)?;
-        let (cx, wx) = gimp_axis(u.x, &self.axes[0]);
-        let (cy, wy) = gimp_axis(u.y, &self.axes[1]);
-        Ok(tensor3(cx, cy, wx, wy, self.grid.inverse_cell_size()))
+        Ok(AxisFactors::centred(gimp_axis(u.x, &self.axes[0]), gimp_axis(u.y, &self.axes[1])))
+    }
+
+    #[inline(always)]
+    fn weights(&self, f: &AxisFactors) -> [f64; 9] {
+        f.weights()
+    }
+
+    #[inline(always)]
+    fn gradients(&self, f: &AxisFactors) -> [Vector; 9] {
+        f.gradients(self.grid.inverse_cell_size())
     }
 
     fn node_position(&self, node: NodeId) -> Vector {

@@ -62,10 +62,10 @@ mod stencil;
 mod terrain;
 
 pub use active::{ActiveNodes, BLOCK_SIDE};
-pub use bilinear::Bilinear;
+pub use bilinear::{Bilinear, TerrainFactors};
 pub use bspline::QuadraticBSpline;
 pub use error::{GridError, LocateError};
-pub use gimp::Gimp;
+pub use gimp::{AxisFactors, Gimp};
 pub use math::{Matrix, Real, Vector};
 pub use node::{BoundaryNormals, CellCoords, NodeId};
 pub use regular::RegularGrid;

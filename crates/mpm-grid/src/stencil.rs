@@ -54,8 +54,33 @@ pub fn stencil_nodes<const N: usize>(first: NodeId) -> [NodeId; N] {
 ///
 /// `N` is the stencil size: 4 for bilinear, 9 for uGIMP and quadratic B-splines.
 pub trait ShapeFunctions<const N: usize>: Send + Sync {
+    /// The few numbers a point's N weights and N gradients are computed from (its fractions
+    /// across a cell, or its 1D weights along each axis). A solver may keep these per particle
+    /// instead of the stencil, which is 2–4 times larger, and expand them in every pass that
+    /// needs weights or gradients: the expansion is a few multiplications, cheaper than
+    /// streaming the stencil through memory again.
+    type Factors: Copy + Default + std::fmt::Debug + Send + Sync;
+
+    /// the first (lowest) node of the stencil at `x` and the factors of its weights and
+    /// gradients; a typed error for a point off the grid.
+    fn factors(&self, x: Vector) -> Result<(NodeId, Self::Factors), LocateError>;
+
+    /// N_i(x) in slot order, from the factors `factors(x)` returned: the same bits every call.
+    fn weights(&self, f: &Self::Factors) -> [f64; N];
+
+    /// ∇N_i(x) (1/m) in slot order, from the factors `factors(x)` returned.
+    fn gradients(&self, f: &Self::Factors) -> [Vector; N];
+
     /// nodes, weights and gradients at `x`; a typed error for a point off the grid.
-    fn stencil(&self, x: Vector) -> Result<Stencil<N>, LocateError>;
+    #[inline(always)]
+    fn stencil(&self, x: Vector) -> Result<Stencil<N>, LocateError> {
+        let (first, f) = self.factors(x)?;
+        Ok(Stencil {
+            nodes: stencil_nodes(first),
+            weights: self.weights(&f),
+            gradients: self.gradients(&f),
+        })
+    }
 
     /// position of a node, m. Defined for every node id, including ghost nodes outside the grid
     /// (extrapolating the grid's geometry), so it never fails.

@@ -141,16 +141,15 @@ pub(crate) struct Ahead {
 
 /// Per-step memory, reused between steps (no allocation once the material stops growing).
 #[derive(Debug)]
-pub(crate) struct Scratch<const N: usize> {
+pub(crate) struct Scratch<F, const N: usize> {
     /// Grid node id of each particle's stencil's first node: the others follow from it
     /// ([`mpm_grid::stencil_nodes`]).
     pub(crate) first_node: Vec<NodeId>,
     /// Dense active-node indices of each particle's stencil.
     pub(crate) node_index: Vec<[u32; N]>,
-    /// S_ip.
-    pub(crate) weights: Vec<[Real; N]>,
-    /// G_ip.
-    pub(crate) gradients: Vec<[Vector; N]>,
+    /// The factors S_ip and G_ip are computed from ([`ShapeFunctions::Factors`]): each pass
+    /// that needs them expands them again, cheaper than keeping the N weights and gradients.
+    pub(crate) factors: Vec<F>,
     /// The active nodes.
     pub(crate) active: ActiveNodes,
     /// Particles binned by the 8 × 8 node block holding their stencil's first node, in
@@ -195,7 +194,7 @@ pub(crate) struct Scratch<const N: usize> {
     /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
     /// `Some` when the last step's final particle loop already put every particle's stencil at
-    /// its current position into `first_node`, `weights` and `gradients`; `None` makes `locate`
+    /// its current position into `first_node` and `factors`; `None` makes `locate`
     /// compute them.
     pub(crate) stencils_ahead: Option<Ahead>,
     /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
@@ -210,13 +209,12 @@ pub(crate) struct Scratch<const N: usize> {
     pub(crate) paths: [usize; 3],
 }
 
-impl<const N: usize> Scratch<N> {
+impl<F, const N: usize> Scratch<F, N> {
     fn new() -> Self {
         Self {
             first_node: Vec::new(),
             node_index: Vec::new(),
-            weights: Vec::new(),
-            gradients: Vec::new(),
+            factors: Vec::new(),
             active: ActiveNodes::new(),
             bin_start: Vec::new(),
             bin_particle: Vec::new(),
@@ -252,8 +250,7 @@ impl<const N: usize> Scratch<N> {
         use std::mem::size_of;
         self.first_node.capacity() * size_of::<NodeId>()
             + self.node_index.capacity() * size_of::<[u32; N]>()
-            + self.weights.capacity() * size_of::<[Real; N]>()
-            + self.gradients.capacity() * size_of::<[Vector; N]>()
+            + self.factors.capacity() * size_of::<F>()
             + self.active.len() * (size_of::<NodeId>() + 8)
             + (self.bin_start.capacity()
                 + self.bin_particle.capacity()
@@ -302,7 +299,7 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) reference_density: Vec<Real>,
     /// (λ + 2G)/ρ_ref of each material (m²/s²): the largest c_p² the time step uses.
     pub(crate) signal_cap: Vec<Real>,
-    pub(crate) scratch: Scratch<N>,
+    pub(crate) scratch: Scratch<S::Factors, N>,
     /// Last step's report (zeros before the first step).
     pub(crate) last: StepReport,
     /// The next step's fastest signal (max_p (c_p + |v_p|)) and speed, with their particles,
@@ -691,9 +688,11 @@ pub fn estimated_bytes(
         + state_bytes
         + 2 * size_of::<u16>()
         + if apic { size_of::<Matrix>() } else { 0 }
-        // first node id; dense indices, weights, gradients
+        // first node id, dense indices, and the factors of the weights and gradients: at most
+        // 3 numbers for a 4-node stencil, 2 × 3 (weight, slope) pairs for a 3 × 3 one
         + size_of::<NodeId>()
-        + stencil * (size_of::<u32>() + size_of::<Real>() + size_of::<Vector>())
+        + stencil * size_of::<u32>()
+        + if stencil <= 4 { 3 } else { 12 } * size_of::<Real>()
         // bin entry, place in the block's patch
         + size_of::<u32>()
         + 1;

@@ -28,12 +28,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if self.config.transfer == Transfer::Flip && !self.scratch.held.is_empty() {
             self.correct_held_normals();
         }
-        let sc = &self.scratch;
-        let (idx, w) = (&sc.node_index, &sc.weights);
-        let (a, v) = (&sc.acceleration, &sc.velocity);
         if self.config.transfer == Transfer::Apic {
             return self.g2p_apic(dt);
         }
+        let sc = &self.scratch;
+        let (idx, factors, shape) = (&sc.node_index, &sc.factors, &self.shape);
+        let (a, v) = (&sc.acceleration, &sc.velocity);
         let step = self.step + 1;
         let chunk = chunk_len(self.particles.len());
         let failure = self
@@ -45,13 +45,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .map(|(c, (xs, vs))| {
                 for (j, (x, vp)) in xs.iter_mut().zip(vs.iter_mut()).enumerate() {
                     let p = c * chunk + j;
+                    let w = shape.weights(&factors[p]);
                     let mut dx = Vector::ZERO;
                     let mut dv = Vector::ZERO;
                     for k in 0..N {
                         let i = idx[p][k] as usize;
                         // v_i^L = v_i + a_i Δt (eq 5)
-                        dx += w[p][k] * (v[i] + a[i] * dt);
-                        dv += w[p][k] * a[i];
+                        dx += w[k] * (v[i] + a[i] * dt);
+                        dv += w[k] * a[i];
                     }
                     let (x_new, v_new) = (*x + dt * dx, *vp + dt * dv);
                     check_finite(step, p, *x, x_new, v_new)?;
@@ -81,7 +82,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             {
                 let e = e.load(Ordering::Relaxed);
                 let (q, k) = (e as usize / N, e as usize % N);
-                let dv = sc.weights[q][k] * (sc.velocity[i] - p.velocity[q]).dot(n) * n;
+                let w = self.shape.weights(&sc.factors[q])[k];
+                let dv = w * (sc.velocity[i] - p.velocity[q]).dot(n) * n;
                 sc.corrections.push((q as u32, dv));
             }
         }
@@ -93,7 +95,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// APIC grid to particle: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p.
     fn g2p_apic(&mut self, dt: Real) -> Result<(), SolverError> {
         let sc = &self.scratch;
-        let (idx, w, grad) = (&sc.node_index, &sc.weights, &sc.gradients);
+        let (idx, factors, shape) = (&sc.node_index, &sc.factors, &self.shape);
         let (a, v) = (&sc.acceleration, &sc.velocity);
         let step = self.step + 1;
         let p = &mut self.particles;
@@ -107,13 +109,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .map(|(c, ((xs, vs), cs))| {
                 for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
                     let q = c * chunk + j;
+                    let (w, grad) = (shape.weights(&factors[q]), shape.gradients(&factors[q]));
                     let mut v_new = Vector::ZERO;
                     let mut c_new = Matrix::ZERO;
                     for k in 0..N {
                         let i = idx[q][k] as usize;
                         let v_end = v[i] + a[i] * dt;
-                        v_new += w[q][k] * v_end;
-                        let g = grad[q][k];
+                        v_new += w[k] * v_end;
+                        let g = grad[k];
                         c_new += Matrix::from_cols(v_end * g.x, v_end * g.y);
                     }
                     let x_new = *x + dt * v_new;

@@ -7,12 +7,12 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Boundary, Friction};
-use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, Stencil, stencil_nodes};
+use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
 use crate::config::Contact;
 use crate::error::SolverError;
-use crate::math::{Real, Vector};
+use crate::math::Vector;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::par::{chunk_len, counting_sort};
@@ -30,8 +30,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let reusable = sc.located && sc.first_node.len() == n;
         let chunk = chunk_len(n);
         sc.first_node.resize(n, NodeId::default());
-        sc.weights.resize(n, [0.0; N]);
-        sc.gradients.resize(n, [Vector::ZERO; N]);
+        sc.factors.resize(n, S::Factors::default());
 
         let shape = &self.shape;
         let positions = &self.particles.position;
@@ -45,15 +44,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 let failure = sc
                     .first_node
                     .par_chunks_mut(chunk)
-                    .zip(sc.weights.par_chunks_mut(chunk))
-                    .zip(sc.gradients.par_chunks_mut(chunk))
+                    .zip(sc.factors.par_chunks_mut(chunk))
                     .enumerate()
-                    .map(|(c, ((first, w), g))| {
+                    .map(|(c, (first, factors))| {
                         let mut changed = false;
                         for j in 0..first.len() {
                             let p = c * chunk + j;
-                            match shape.stencil(positions[p]) {
-                                Ok(s) => changed |= store(s, &mut first[j], &mut w[j], &mut g[j]),
+                            match shape.factors(positions[p]) {
+                                Ok((node, f)) => {
+                                    changed |= store(node, f, &mut first[j], &mut factors[j])
+                                }
                                 Err(cause) => return Err((p, cause)),
                             }
                         }
@@ -66,9 +66,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         // `try_reduce` may meet any failing chunk first: name the lowest failing
                         // particle, whatever the thread count.
                         let particle = (0..particle)
-                            .find(|&p| shape.stencil(positions[p]).is_err())
+                            .find(|&p| shape.factors(positions[p]).is_err())
                             .unwrap_or(particle);
-                        let cause = shape.stencil(positions[particle]).err().unwrap_or(cause);
+                        let cause = shape.factors(positions[particle]).err().unwrap_or(cause);
                         self.scratch.located = false;
                         return Err(SolverError::OutsideGrid {
                             step: self.step + 1,
@@ -114,7 +114,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.active.rebuild(sc.first_node.iter().flat_map(|&f| stencil_nodes::<N>(f)));
         let complete = number_stencils(sc, chunk);
         debug_assert!(complete, "every stencil node was inserted by the rebuild");
-        index_blocks::<N>(sc);
+        index_blocks(sc);
         let active = &sc.active;
         let nodes = active.len();
         for v in [&mut sc.velocity, &mut sc.force, &mut sc.acceleration] {
@@ -187,7 +187,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 /// For the block scatter (`p2g.rs`): each active node's block rank and place in its block's patch,
 /// and each block's neighbours below-left, below and left (`u32::MAX` where inactive); the patches
 /// sized to the blocks.
-fn index_blocks<const N: usize>(sc: &mut Scratch<N>) {
+fn index_blocks<F, const N: usize>(sc: &mut Scratch<F, N>) {
     let side = patch_side(N);
     let active = &sc.active;
     sc.node_block.clear();
@@ -214,7 +214,7 @@ fn index_blocks<const N: usize>(sc: &mut Scratch<N>) {
 
 /// puts the dense index of every stencil node into `node_index`; false when some node is not in
 /// the active set (its index is then `u32::MAX`).
-fn number_stencils<const N: usize>(sc: &mut Scratch<N>, chunk: usize) -> bool {
+fn number_stencils<F, const N: usize>(sc: &mut Scratch<F, N>, chunk: usize) -> bool {
     let active = &sc.active;
     sc.node_index.resize(sc.first_node.len(), [0; N]);
     sc.node_index
@@ -235,7 +235,7 @@ fn number_stencils<const N: usize>(sc: &mut Scratch<N>, chunk: usize) -> bool {
 /// (a counting sort: deterministic), records where each particle's first node lies in its block's
 /// patch, and under surface contact lists the (particle, slot) entries of every boundary node, in
 /// particle order. False, with the bins left incomplete, when some active node is in no stencil.
-fn bin_particles<const N: usize>(sc: &mut Scratch<N>) -> bool {
+fn bin_particles<F, const N: usize>(sc: &mut Scratch<F, N>) -> bool {
     let (n, nodes) = (sc.node_index.len(), sc.active.len());
     let chunk = chunk_len(n);
     sc.referenced.resize_with(nodes, || AtomicBool::new(false));
@@ -282,25 +282,19 @@ fn bin_particles<const N: usize>(sc: &mut Scratch<N>) -> bool {
     true
 }
 
-/// writes stencil `s` into a particle's slots; true when its nodes differ from the ones the slots
-/// held (their dense indices and the bins must then be redone). Used by `locate` and, for
-/// the stencils computed ahead, by the stress update. Only the first node is kept: a stencil's
-/// nodes follow from it (the slot layout of [`Stencil`]), so they change exactly when it does.
+/// writes the first node and the factors of a particle's stencil into its slots; true when
+/// the node differs from the one the slot held (the dense indices and the bins must then be
+/// redone). A stencil's nodes follow from its first node (the slot layout of [`mpm_grid::Stencil`]), so
+/// they change exactly when it does. Used by `locate` and, for the stencils computed ahead, by
+/// the stress update.
 #[inline(always)]
-pub(crate) fn store<const N: usize>(
-    s: Stencil<N>,
-    first: &mut NodeId,
-    weights: &mut [Real; N],
-    gradients: &mut [Vector; N],
-) -> bool {
-    debug_assert_eq!(s.nodes, stencil_nodes::<N>(s.nodes[0]), "a tensor-product stencil");
-    let changed = *first != s.nodes[0];
+pub(crate) fn store<F>(node: NodeId, factors: F, first: &mut NodeId, slot: &mut F) -> bool {
+    let changed = *first != node;
     if changed {
         // (most steps keep a particle's nodes: no write then)
-        *first = s.nodes[0];
+        *first = node;
     }
-    *weights = s.weights;
-    *gradients = s.gradients;
+    *slot = factors;
     changed
 }
 

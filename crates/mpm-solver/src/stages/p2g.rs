@@ -95,8 +95,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             (&p.mass[..], &p.velocity[..], &p.volume[..], &p.stress[..]);
         let (position, affine) = (&p.position[..], &p.affine[..]);
         let Scratch {
-            weights,
-            gradients,
+            factors,
             bin_start,
             bin_particle,
             base,
@@ -112,7 +111,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             force: nodal_force,
             ..
         } = &mut self.scratch;
-        let (weights, gradients, base) = (&weights[..], &gradients[..], &base[..]);
+        let (factors, base) = (&factors[..], &base[..]);
         patch_mass
             .par_chunks_mut(cells)
             .zip(patch_momentum.par_chunks_mut(cells))
@@ -140,7 +139,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 for q in bin {
                     let q = q.load(Ordering::Relaxed) as usize;
                     let at = usize::from(base[q]);
-                    let (m, v, wq, gq) = (mass[q], velocity[q], &weights[q], &gradients[q]);
+                    let (m, v, f) = (mass[q], velocity[q], &factors[q]);
+                    let wq = shape.weights(f);
+                    let gq = if FORCE { shape.gradients(f) } else { [Vector::ZERO; N] };
                     let (vol, s) = (volume[q], stress[q]);
                     let (c_q, x0) = if APIC {
                         (affine[q], position[q] - dt_back * v)

@@ -82,7 +82,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (mass, velocity) = (&p.mass, &p.velocity);
         let chunk = chunk_len(p.len());
         // Zipped below: a shorter array would silently drop particles.
-        debug_assert!(sc.node_index.len() == p.len() && sc.gradients.len() == p.len());
+        debug_assert!(sc.node_index.len() == p.len() && sc.factors.len() == p.len());
         // USL with APIC: G2P has just stored C_p = Σ_i v_i^L ⊗ G_ip, the very sum (same terms, same
         // order) this update needs, since USL strains with v^L; reading it spares the gather.
         let from_affine =
@@ -96,10 +96,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .zip(p.volume.par_chunks_mut(chunk))
             .zip(sc.first_node.par_chunks_mut(chunk))
             .zip(sc.node_index.par_chunks_mut(chunk))
-            .zip(sc.weights.par_chunks_mut(chunk))
-            .zip(sc.gradients.par_chunks_mut(chunk))
+            .zip(sc.factors.par_chunks_mut(chunk))
             .enumerate()
-            .map(|(c, ((((((stress, state), volume), first), idx), weights), grads))| {
+            .map(|(c, (((((stress, state), volume), first), idx), factors))| {
                 let mut tally = ChunkTally::default();
                 for j in 0..stress.len() {
                     let q = c * chunk + j;
@@ -107,18 +106,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         affine[q]
                     } else {
                         let mut l = Matrix::ZERO;
+                        let grads = shape.gradients(&factors[j]);
                         for k in 0..N {
                             let v = nodal[idx[j][k] as usize];
-                            let g: Vector = grads[j][k];
+                            let g: Vector = grads[k];
                             l += Matrix::from_cols(v * g.x, v * g.y);
                         }
                         l
                     };
                     if last {
                         // the next step's stencil, at the final position (`locate.rs`).
-                        match shape.stencil(position[q]) {
-                            Ok(s) => {
-                                if store(s, &mut first[j], &mut weights[j], &mut grads[j]) {
+                        match shape.factors(position[q]) {
+                            Ok((node, f)) => {
+                                if store(node, f, &mut first[j], &mut factors[j]) {
                                     // its dense indices in the current active set, which
                                     // `locate` keeps unless some node joins or leaves it.
                                     tally.changed = true;
@@ -338,9 +338,9 @@ mod tests {
         let sc = &s.scratch;
         for q in 0..s.particles.len() {
             let mut l = crate::Matrix::ZERO;
-            for k in 0..9 {
+            let grads = mpm_grid::ShapeFunctions::gradients(&s.shape, &sc.factors[q]);
+            for (k, g) in grads.into_iter().enumerate() {
                 let v = sc.velocity[sc.node_index[q][k] as usize];
-                let g = sc.gradients[q][k];
                 l += crate::Matrix::from_cols(v * g.x, v * g.y);
             }
             assert_eq!(l, s.particles.affine[q], "particle {q}");
