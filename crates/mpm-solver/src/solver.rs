@@ -553,6 +553,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// each of its parallel stages then starts on that worker, where from outside each stage
     /// would hand itself to the pool and put the caller to sleep until it ends (measured: 25 %
     /// of an elastic 100 k-particle step on one thread). Inside a pool it runs where it is.
+    /// Errors and panics come back to the caller as before. The step's serial parts then run on
+    /// a worker's stack (rayon's default size) and several solvers stepped from their own
+    /// threads share the global pool's workers; a caller that wants its own pool installs it.
     pub fn step_capped(&mut self, max_dt: Real) -> Result<StepReport, SolverError> {
         rayon::scope(|_| self.advance(max_dt))
     }
@@ -669,6 +672,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
+/// the most bytes the factors of a 4-node stencil take (`Bilinear<TerrainGrid>`: a, b, ∂b/∂x).
+const FACTORS_4: usize = 3 * size_of::<Real>();
+/// the most bytes the factors of a 3 × 3 stencil take (uGIMP, B-spline: 2 × 3 (weight, slope)).
+const FACTORS_9: usize = 12 * size_of::<Real>();
+
 /// heap bytes a running solver of `particles` particles, `nodes` active nodes, stencils of
 /// `stencil` nodes, a constitutive state of `state_bytes` bytes and (with `apic`) affine
 /// matrices holds: about what [`Solver::heap_bytes`] reports once it runs (the patches of
@@ -692,7 +700,7 @@ pub fn estimated_bytes(
         // 3 numbers for a 4-node stencil, 2 × 3 (weight, slope) pairs for a 3 × 3 one
         + size_of::<NodeId>()
         + stencil * size_of::<u32>()
-        + if stencil <= 4 { 3 } else { 12 } * size_of::<Real>()
+        + (if stencil <= 4 { FACTORS_4 } else { FACTORS_9 })
         // bin entry, place in the block's patch
         + size_of::<u32>()
         + 1;
@@ -830,5 +838,19 @@ mod tests {
                 other => panic!("{scheme:?}: {other:?}"),
             }
         }
+    }
+
+    /// `estimated_bytes` charges every shape's factors at most `FACTORS_4` / `FACTORS_9`: a
+    /// shape whose factors grew would make it under-estimate the heap it is meant to bound.
+    #[test]
+    fn the_memory_estimate_covers_every_shapes_factors() {
+        use mpm_grid::{Gimp, QuadraticBSpline, ShapeFunctions, TerrainGrid};
+        fn factors<S: ShapeFunctions<N>, const N: usize>() -> usize {
+            size_of::<S::Factors>()
+        }
+        assert!(factors::<Bilinear<RegularGrid>, 4>() <= super::FACTORS_4);
+        assert!(factors::<Bilinear<TerrainGrid>, 4>() <= super::FACTORS_4);
+        assert!(factors::<Gimp, 9>() <= super::FACTORS_9);
+        assert!(factors::<QuadraticBSpline, 9>() <= super::FACTORS_9);
     }
 }

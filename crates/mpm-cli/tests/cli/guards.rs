@@ -181,7 +181,7 @@ fn ten_million_particles_are_refused_under_a_small_memory_limit_without_allocati
     let dir = temp_dir("memory");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("big.toml");
-    // 50 m × 5 m at 0.01 m cells, 2 × 2 per cell: 10 million particles (≈ 5.5 GB to run).
+    // 50 m × 5 m at 0.01 m cells, 2 × 2 per cell: 10 million particles (several GB to run).
     let text = free_fall(|t| {
         t.replace("origin = [-1.0, 0.0]", "origin = [0.0, 0.0]")
             .replace("cell = [0.25, 0.25]", "cell = [0.01, 0.01]")

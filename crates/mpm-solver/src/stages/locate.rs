@@ -1,6 +1,7 @@
 //! Stage 2: locate every particle on the grid.
 //!
-//! Evaluates the stencil (nodes, S_ip, G_ip) of every particle, rebuilds the sparse set of active
+//! Evaluates every particle's stencil as its first node and the factors of its S_ip and G_ip
+//! ([`ShapeFunctions::factors`]: the passes expand them), rebuilds the sparse set of active
 //! nodes (only nodes whose support holds a particle exist), numbers each particle's nodes densely,
 //! bins the particles by node block for the particle-to-grid sums (`p2g.rs`), and lists the active
 //! nodes that lie on a declared boundary (with, under surface contact, their particles).
@@ -26,7 +27,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // The node ids of the last located step are still in `first_node`: if no particle's stencil
         // changes its nodes (most steps: at C = 0.1 a particle needs many steps to cross a cell),
         // the active set, its numbering (a function of the set), the bins and the boundary
-        // nodes are all unchanged, and only the weights and gradients need computing.
+        // nodes are all unchanged, and only the factors of the weights and gradients are new.
         let reusable = sc.located && sc.first_node.len() == n;
         let chunk = chunk_len(n);
         sc.first_node.resize(n, NodeId::default());
@@ -302,7 +303,7 @@ pub(crate) fn store<F>(node: NodeId, factors: F, first: &mut NodeId, slot: &mut 
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
-    use mpm_grid::{ActiveNodes, Bilinear, RegularGrid};
+    use mpm_grid::{ActiveNodes, Bilinear, RegularGrid, ShapeFunctions};
 
     use crate::generate::{Shape, fill};
     use crate::particles::{NewParticle, Particles};
@@ -319,7 +320,19 @@ mod tests {
     /// `touch`: take `particles_mut()` before every step without changing anything, as scripted
     /// loading does; the stencils computed ahead must then be recomputed, never trusted stale.
     fn sliding_with(force_full_locate: bool, touch: bool) -> Vec<u64> {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap();
+        sliding_on(Bilinear(sliding_grid()), force_full_locate, touch)
+    }
+
+    fn sliding_grid() -> RegularGrid {
+        RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap()
+    }
+
+    /// `sliding_with` for any shape functions on `sliding_grid`.
+    fn sliding_on<S: ShapeFunctions<N>, const N: usize>(
+        shape: S,
+        force_full_locate: bool,
+        touch: bool,
+    ) -> Vec<u64> {
         let mut particles = Particles::default();
         let block = Shape::Rectangle { min: Vector::new(0.5, 0.0), max: Vector::new(1.5, 1.0) };
         for (i, s) in fill(&block, 0.125).into_iter().enumerate() {
@@ -337,7 +350,7 @@ mod tests {
             ..Default::default()
         };
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
-        let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+        let mut s = Solver::new(shape, vec![material], particles, config).unwrap();
         for _ in 0..400 {
             if force_full_locate {
                 s.scratch.located = false;
@@ -369,5 +382,17 @@ mod tests {
     #[test]
     fn taking_the_particles_mutably_between_steps_changes_nothing() {
         assert_eq!(sliding_with(false, true), sliding(false));
+    }
+
+    /// The same for the 3 × 3 stencils, whose first node lies one node below and left of the
+    /// point's nearest node: ghost nodes at j = −1 under the floor, and a first node that
+    /// changes at the half-cell lines rather than at the cell edges.
+    #[test]
+    fn wide_stencils_reuse_what_a_full_locate_would_compute() {
+        use mpm_grid::{Gimp, QuadraticBSpline};
+        let spline = || QuadraticBSpline::new(sliding_grid());
+        assert_eq!(sliding_on(spline(), false, false), sliding_on(spline(), true, false));
+        let gimp = || Gimp::with_particles_per_cell(sliding_grid(), [2, 2]).unwrap();
+        assert_eq!(sliding_on(gimp(), false, false), sliding_on(gimp(), true, false));
     }
 }
