@@ -1,15 +1,30 @@
-//! Runs a fixed number of MUSL steps of an elastic block for profilers (callgrind, perf), which need
-//! a plain binary rather than criterion's harness: `cargo build --release -p mpm-benches --example
-//! profile_step`, then `valgrind --tool=callgrind target/release/examples/profile_step 20000 20 [WARMUP]`.
+//! Runs a fixed number of MUSL steps of a block on a floor for profilers (callgrind, perf), which
+//! need a plain binary rather than criterion's harness: `cargo build --release -p mpm-benches
+//! --example profile_step`, then `valgrind --tool=callgrind target/release/examples/profile_step
+//! 20000 20 [WARMUP] [elastic|sand]` (the step bench's elastic body, or its Drucker-Prager sand).
 
-use mpm_constitutive::LinearElastic;
+use mpm_constitutive::{ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic};
 
 fn main() {
     let mut args = std::env::args().skip(1);
     let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20_000);
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20);
-    let material = LinearElastic::from_young_poisson(2e6, 0.3).expect("valid elasticity");
     let warmup: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(0);
+    match args.next().as_deref() {
+        None | Some("elastic") => {
+            let material = LinearElastic::from_young_poisson(2e6, 0.3).expect("valid elasticity");
+            run(n, steps, warmup, material);
+        }
+        Some("sand") => {
+            let sand = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND)
+                .expect("the paper's sand is valid");
+            run(n, steps, warmup, sand);
+        }
+        Some(other) => eprintln!("unknown material {other:?}: elastic or sand"),
+    }
+}
+
+fn run<M: ConstitutiveModel>(n: usize, steps: usize, warmup: usize, material: M) {
     let mut solver = mpm_benches::square_on_floor(n, material);
     // Steps before the timed ones: the block settles and particles begin to cross cells.
     for _ in 0..warmup {
