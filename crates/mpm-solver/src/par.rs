@@ -132,6 +132,41 @@ mod tests {
         }
     }
 
+    /// `counting_sort` against the plain serial bucketing it must equal: empty input, a
+    /// single item, a single key, items that emit nothing (`u32::MAX`), and enough items for
+    /// all 16 chunks, each on 1 and 2 threads.
+    #[test]
+    fn counting_sort_is_the_stable_bucketing_for_any_thread_count() {
+        for (n, keys) in [(0, 5), (1, 1), (1, 7), (300, 1), (300, 13), (50_000, 97)] {
+            // two pairs per item: key (i·31 mod keys) and, for every third item, nothing
+            let emit = |i: usize| {
+                let skip = if i % 3 == 0 { u32::MAX } else { (i % keys) as u32 };
+                [((i * 31 % keys) as u32, 2 * i as u32), (skip, 2 * i as u32 + 1)]
+            };
+            let mut expected = vec![Vec::new(); keys];
+            for i in 0..n {
+                for (key, value) in emit(i) {
+                    if key != u32::MAX {
+                        expected[key as usize].push(value);
+                    }
+                }
+            }
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let (mut start, mut values, mut counts) = (Vec::new(), Vec::new(), Vec::new());
+                pool.install(|| counting_sort(n, keys, emit, &mut start, &mut values, &mut counts));
+                assert_eq!(start.len(), keys + 1);
+                for (k, want) in expected.iter().enumerate() {
+                    let got: Vec<u32> = values[start[k] as usize..start[k + 1] as usize]
+                        .iter()
+                        .map(|v| v.load(Ordering::Relaxed))
+                        .collect();
+                    assert_eq!(&got, want, "n {n}, keys {keys}, key {k}, {threads} threads");
+                }
+            }
+        }
+    }
+
     fn sum_is_identical_for(n: usize) {
         let f = |i: usize| ((i as f64) * 0.37).sin() * 1e3 + 1e-7 * i as f64;
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
