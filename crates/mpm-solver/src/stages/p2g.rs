@@ -310,6 +310,28 @@ mod tests {
                 }
                 assert!((sc.force[n] - f[n]).abs().max_element() <= tol * f_scale, "force at {n}");
             }
+            // The passes USF and USAVG take apart (mass and velocity, then force) and the
+            // remap (eq 8, over the stored mass) add the same terms in the same order as the
+            // all-in-one pass: the same bits. (The remap at Δt = 0 finds the particles where
+            // P2G did; this scene declares no boundary, so its velocity constraint is void.)
+            let all = (sc.mass.clone(), sc.velocity.clone(), sc.force.clone());
+            let scratch = &mut s.scratch;
+            for v in [&mut scratch.velocity, &mut scratch.force] {
+                v.fill(Vector::NAN);
+            }
+            scratch.mass.fill(f64::NAN);
+            s.p2g_mass_velocity();
+            s.p2g_force(1e-4);
+            fn bits(v: &[Vector]) -> Vec<u64> {
+                v.iter().flat_map(|x| [x.x, x.y]).map(f64::to_bits).collect()
+            }
+            let mass_bits = |m: &[f64]| m.iter().map(|m| m.to_bits()).collect::<Vec<_>>();
+            assert_eq!(mass_bits(&s.scratch.mass), mass_bits(&all.0), "{transfer:?} split mass");
+            assert_eq!(bits(&s.scratch.velocity), bits(&all.1), "{transfer:?} split velocity");
+            assert_eq!(bits(&s.scratch.force), bits(&all.2), "{transfer:?} split force");
+            s.scratch.velocity.fill(Vector::NAN);
+            s.remap_velocity(0.0);
+            assert_eq!(bits(&s.scratch.velocity), bits(&all.1), "{transfer:?} remap");
         }
     }
 }
