@@ -60,7 +60,9 @@ pub use error::{RunError, SceneError};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{DtStats, RunStatus, RunSummary, RunoutMetrics};
-pub use validate::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL, Scene, load_scene_str};
+pub use validate::{
+    DEFAULT_ENERGY_ALARM, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, Scene, load_scene_str,
+};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
 /// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are

@@ -1561,11 +1561,8 @@ fn shape_area(shape: &Shape) -> f64 {
     match shape {
         Shape::Rectangle { min, max } => (max.x - min.x) * (max.y - min.y),
         Shape::OnSlope { length, thickness, .. } => length * thickness,
-        Shape::Polygon { vertices } => {
-            let (lo, hi) = vertices.iter().fold(
-                (Vector::splat(f64::INFINITY), Vector::splat(f64::NEG_INFINITY)),
-                |(lo, hi), v| (lo.min(*v), hi.max(*v)),
-            );
+        Shape::Polygon { .. } => {
+            let [lo, hi] = shape_box(shape);
             (hi.x - lo.x) * (hi.y - lo.y)
         }
     }

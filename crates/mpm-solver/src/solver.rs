@@ -247,7 +247,6 @@ impl<F, const N: usize> Scratch<F, N> {
 
     /// heap bytes held (for memory reports).
     fn heap_bytes(&self) -> usize {
-        use std::mem::size_of;
         self.first_node.capacity() * size_of::<NodeId>()
             + self.node_index.capacity() * size_of::<[u32; N]>()
             + self.factors.capacity() * size_of::<F>()
@@ -507,7 +506,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// heap bytes held by particles and scratch memory.
     pub fn heap_bytes(&self) -> usize {
-        use std::mem::size_of;
         let p = &self.particles;
         p.position.capacity() * size_of::<Vector>() * 3
             + (p.mass.capacity() + p.volume.capacity()) * size_of::<Real>()
@@ -689,7 +687,6 @@ pub fn estimated_bytes(
     state_bytes: usize,
     apic: bool,
 ) -> u64 {
-    use std::mem::size_of;
     let per_particle = 3 * size_of::<Vector>()
         + 2 * size_of::<Real>()
         + size_of::<SymTensor>()

@@ -6,6 +6,8 @@
 //! bins the particles by node block for the particle-to-grid sums (`p2g.rs`), and lists the active
 //! nodes that lie on a declared boundary (with, under surface contact, their particles).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Boundary, Friction};
 use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_nodes};
@@ -14,8 +16,6 @@ use rayon::prelude::*;
 use crate::config::Contact;
 use crate::error::SolverError;
 use crate::math::Vector;
-use std::sync::atomic::{AtomicBool, Ordering};
-
 use crate::par::{chunk_len, counting_sort};
 use crate::solver::{BoundaryNode, Mirror, Scratch, Solver};
 use crate::stages::p2g::patch_side;
@@ -285,9 +285,9 @@ fn bin_particles<F, const N: usize>(sc: &mut Scratch<F, N>) -> bool {
 
 /// writes the first node and the factors of a particle's stencil into its slots; true when
 /// the node differs from the one the slot held (the dense indices and the bins must then be
-/// redone). A stencil's nodes follow from its first node (the slot layout of [`mpm_grid::Stencil`]), so
-/// they change exactly when it does. Used by `locate` and, for the stencils computed ahead, by
-/// the stress update.
+/// redone). A stencil's nodes follow from its first node (the slot layout of
+/// [`mpm_grid::Stencil`]), so they change exactly when it does. Used by `locate` and, for the
+/// stencils computed ahead, by the stress update.
 #[inline(always)]
 pub(crate) fn store<F>(node: NodeId, factors: F, first: &mut NodeId, slot: &mut F) -> bool {
     let changed = *first != node;
