@@ -4,7 +4,7 @@
 //! comes from [`SplitMix64`] with a fixed seed instead of an entropy source, and every whole-step
 //! scene from [`square_on_floor`].
 
-use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
 use mpm_contact::Friction;
 use mpm_grid::{Bilinear, RegularGrid};
 use mpm_solver::generate::{Shape, fill};
@@ -36,7 +36,7 @@ pub fn square_on_floor<M: ConstitutiveModel>(
             velocity: Vector::ZERO,
             volume: s.area,
             density: 1600.0,
-            stress: SymTensor::ZERO,
+            stress: PlaneTensor::ZERO,
             state,
             material: 0,
             body: 0,

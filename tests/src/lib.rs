@@ -10,7 +10,7 @@
 
 use std::ops::ControlFlow;
 
-use mpm_constitutive::{ConstitutiveModel, LinearElastic, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};
 use mpm_contact::Friction;
 use mpm_grid::{
     Bilinear, Gimp, KinkPolicy, QuadraticBSpline, RegularGrid, ShapeFunctions, TerrainGrid,
@@ -39,7 +39,7 @@ pub fn block<S: Copy>(
             velocity,
             volume: s.area,
             density,
-            stress: SymTensor::ZERO,
+            stress: PlaneTensor::ZERO,
             state,
             material: 0,
             body: 0,

@@ -4,7 +4,7 @@
 //! scene and calls a generic [`Job`]; everything below runs monomorphised, with no per-particle
 //! dynamic dispatch.
 
-use mpm_constitutive::{ConstitutiveModel, DpState, DruckerPrager, LinearElastic, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, DpState, DruckerPrager, LinearElastic, PlaneTensor};
 use mpm_grid::{Bilinear, Gimp, QuadraticBSpline, ShapeFunctions};
 use mpm_solver::{Checkpoint, NewParticle, Particles};
 use serde::{Deserialize, Serialize};
@@ -127,7 +127,7 @@ pub(crate) fn particles<M: SceneModel>(seeds: &[Seed], materials: &[M]) -> Parti
             velocity: s.velocity,
             volume: s.volume,
             density: s.density,
-            stress: SymTensor::ZERO,
+            stress: PlaneTensor::ZERO,
             state,
             material: s.material,
             body: s.body,

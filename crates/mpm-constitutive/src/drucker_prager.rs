@@ -74,7 +74,9 @@ use serde::{Deserialize, Serialize};
 use crate::elastic::LinearElastic;
 use crate::error::ConstitutiveError;
 use crate::model::{ConstitutiveModel, Surface, TangentModel, UpdateReport, check_finite};
-use crate::tensor::{SymTensor, Tangent, deviatoric_projector, dyad, tangent_axpby};
+use crate::tensor::{
+    PlaneTensor, SymTensor, Symmetric, Tangent, deviatoric_projector, dyad, tangent_axpby,
+};
 
 /// How the cone is fitted to the Mohr-Coulomb pyramid of `(c, φ)` (and `ψ` for `αg`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -191,15 +193,15 @@ const SQRT_2: f64 = std::f64::consts::SQRT_2;
 const FRAC_1_SQRT_2: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// quantities of the elastic trial state shared by the update and the tangent.
-struct Trial {
-    sigma: SymTensor,
+struct Trial<T> {
+    sigma: T,
     i1: f64,
     /// `ξᵗʳ = dev σᵗʳ − dev β`.
-    xi: SymTensor,
+    xi: T,
     /// `J2(ξᵗʳ) = qᵗʳ²`.
     j2: f64,
     /// `dev β`.
-    beta: SymTensor,
+    beta: T,
 }
 
 /// outcome of the return mapping, before it is written back (`q_tr = qᵗʳ`; `i1`, `q`, `k` are
@@ -338,8 +340,8 @@ impl DruckerPrager {
         state: &DpState,
         d_eps: &SymTensor,
     ) -> Result<Tangent, ConstitutiveError> {
-        self.check_inputs(sigma, state, d_eps)?;
-        let trial = self.trial(sigma, state, d_eps);
+        self.check_inputs(sigma, &state.back_stress, state, d_eps)?;
+        let trial = self.trial(sigma, &state.back_stress, d_eps);
         let g = self.elastic.shear_modulus();
         let bulk = self.elastic.bulk_modulus();
         let q_tr = trial.j2.sqrt();
@@ -370,18 +372,23 @@ impl DruckerPrager {
     #[inline(always)]
     // x − x is the point: 0 for finite x, NaN otherwise.
     #[allow(clippy::eq_op)]
-    fn check_inputs(
+    fn check_inputs<T: Symmetric>(
         &self,
-        sigma: &SymTensor,
+        sigma: &T,
+        back_stress: &T,
         state: &DpState,
-        d_eps: &SymTensor,
+        d_eps: &T,
     ) -> Result<(), ConstitutiveError> {
         // One test for the common all-finite case (see `SymTensor::finite_probe`).
         let probe = sigma.finite_probe()
             + d_eps.finite_probe()
-            + state.back_stress.finite_probe()
+            + back_stress.finite_probe()
             + ((state.k - state.k) + (state.eps_p_bar - state.eps_p_bar));
-        if probe == 0.0 { Ok(()) } else { Self::non_finite_input(sigma, state, d_eps) }
+        if probe == 0.0 {
+            Ok(())
+        } else {
+            Self::non_finite_input(&sigma.to_sym(), &back_stress.to_sym(), state, &d_eps.to_sym())
+        }
     }
 
     /// names the first non-finite input (the slow path of [`check_inputs`](Self::check_inputs)).
@@ -389,6 +396,7 @@ impl DruckerPrager {
     #[inline(never)]
     fn non_finite_input(
         sigma: &SymTensor,
+        back_stress: &SymTensor,
         state: &DpState,
         d_eps: &SymTensor,
     ) -> Result<(), ConstitutiveError> {
@@ -398,7 +406,7 @@ impl DruckerPrager {
         } else if !state.eps_p_bar.is_finite() {
             ("eps_p_bar", state.eps_p_bar)
         } else {
-            let (c, v) = state.back_stress.first_non_finite().unwrap_or(("xx", f64::NAN));
+            let (c, v) = back_stress.first_non_finite().unwrap_or(("xx", f64::NAN));
             let name = match c {
                 "xx" => "back_stress.xx",
                 "yy" => "back_stress.yy",
@@ -413,19 +421,11 @@ impl DruckerPrager {
     }
 
     #[inline]
-    fn trial(&self, sigma: &SymTensor, state: &DpState, d_eps: &SymTensor) -> Trial {
+    fn trial<T: Symmetric>(&self, sigma: &T, back_stress: &T, d_eps: &T) -> Trial<T> {
         // eq 10: σᵗʳ = σ + λ tr(Δε) I + 2G Δε.
         let lt = self.lame * d_eps.trace();
-        let tg = self.two_g;
-        let st = SymTensor::new(
-            sigma.xx + lt + tg * d_eps.xx,
-            sigma.yy + lt + tg * d_eps.yy,
-            sigma.zz + lt + tg * d_eps.zz,
-            sigma.xy + tg * d_eps.xy,
-            sigma.yz + tg * d_eps.yz,
-            sigma.zx + tg * d_eps.zx,
-        );
-        let beta = state.back_stress.deviator();
+        let st = sigma.elastic_trial(lt, self.two_g, d_eps);
+        let beta = back_stress.deviator();
         let i1 = st.trace();
         let xi = st.deviator() - beta;
         let j2 = 0.5 * xi.ddot(&xi);
@@ -433,7 +433,7 @@ impl DruckerPrager {
     }
 
     #[inline]
-    fn return_map(&self, t: &Trial, state: &DpState) -> Result<Return, ConstitutiveError> {
+    fn return_map<T>(&self, t: &Trial<T>, state: &DpState) -> Result<Return, ConstitutiveError> {
         // f = qᵗʳ − r with r = k − α I1ᵗʳ the strength at the trial pressure; f ≤ 0 is
         // r ≥ 0 and J2 ≤ r², which spares the square root on the (most frequent) elastic path.
         let r = state.k - self.alpha * t.i1;
@@ -486,42 +486,33 @@ impl ConstitutiveModel for DruckerPrager {
         state: &mut DpState,
         d_eps: &SymTensor,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        self.check_inputs(sigma, state, d_eps)?;
-        let t = self.trial(sigma, state, d_eps);
-        let (new_sigma, new_state, report) = match self.return_map(&t, state)? {
-            Return::Elastic => (t.sigma, *state, UpdateReport::ELASTIC),
-            Return::Cone { dl, i1, q, k, q_tr } => {
-                // with ‖ξᵗʳ‖ = √2 qᵗʳ, √2 n̂ = ξᵗʳ/qᵗʳ: one division for the whole return.
-                let inv_q = 1.0 / q_tr;
-                let beta = t.beta + t.xi * (self.kin_h * dl * inv_q);
-                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta + t.xi * (q * inv_q);
-                // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : ξᵗʳ/(2qᵗʳ).
-                let work = dl * (self.alpha_g * i1 + q + 0.5 * inv_q * beta.ddot(&t.xi));
-                let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
-                let rep =
-                    UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
-                (s, st, rep)
+        let back_stress = state.back_stress;
+        self.update_in(sigma, *sigma, back_stress, state, d_eps)
+    }
+
+    // The turned stress and back stress stay in registers: stored and read back, their wide
+    // loads stalled on the narrow stores (flume: 10 % of the run).
+    #[inline(always)]
+    fn update_plane(
+        &self,
+        sigma: &mut PlaneTensor,
+        state: &mut DpState,
+        d_eps: &PlaneTensor,
+        rotation: Option<(f64, f64)>,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        let back_stress = PlaneTensor::from_sym(&state.back_stress);
+        match rotation {
+            Some((c, s)) => {
+                let (start, back) = (sigma.rotated_z(c, s), back_stress.rotated_z(c, s));
+                self.update_in(sigma, start, back, state, d_eps)
             }
-            Return::Apex { dl, i1, k } => {
-                // β_{n+1} = β + (1 − M)H Δλ √2 n̂ = β + ((1 − M)H/B) ξᵗʳ.
-                let beta = t.beta + t.xi * (self.kin_h * self.inv_b);
-                let s = SymTensor::IDENTITY * (i1 / 3.0) + beta;
-                // σ : C⁻¹ : (σᵗʳ − σ) with σᵗʳ − σ = (I1ᵗʳ − I1)/3 I + (G/B) ξᵗʳ.
-                let work = i1 * (t.i1 - i1) * self.inv_9k + 0.5 * self.inv_b * beta.ddot(&t.xi);
-                let st = DpState { back_stress: beta, k, eps_p_bar: state.eps_p_bar + dl };
-                let rep =
-                    UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };
-                (s, st, rep)
-            }
-        };
-        if !new_sigma.is_finite() {
-            // finite inputs so large that the trial overflowed: refuse, leave inputs untouched.
-            let (component, value) = new_sigma.first_non_finite().unwrap_or(("xx", f64::NAN));
-            return Err(ConstitutiveError::NonFiniteStress { component, value });
+            None => self.update_in(sigma, *sigma, back_stress, state, d_eps),
         }
-        *sigma = new_sigma;
-        *state = new_state;
-        Ok(report)
+    }
+
+    #[inline(always)]
+    fn rotate_state_z(&self, state: &mut DpState, c: f64, s: f64) {
+        state.back_stress = state.back_stress.rotated_z(c, s);
     }
 
     #[inline(always)]
@@ -531,6 +522,63 @@ impl ConstitutiveModel for DruckerPrager {
 
     fn equivalent_plastic_strain(&self, state: &DpState) -> f64 {
         state.eps_p_bar
+    }
+}
+
+impl DruckerPrager {
+    /// [`ConstitutiveModel::update`] on full or plane-strain tensors (see [`Symmetric`]) from
+    /// the stress `start` and back stress `back_stress` (the state's, possibly turned by an
+    /// objective rate): writes `sigma` and `state` (its back stress in the components of `T`)
+    /// only on success.
+    #[inline(always)]
+    fn update_in<T: Symmetric>(
+        &self,
+        sigma: &mut T,
+        start: T,
+        back_stress: T,
+        state: &mut DpState,
+        d_eps: &T,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        self.check_inputs(&start, &back_stress, state, d_eps)?;
+        let t = self.trial(&start, &back_stress, d_eps);
+        let (new_sigma, new_state, report) = match self.return_map(&t, state)? {
+            Return::Elastic => {
+                let st = DpState { back_stress: back_stress.to_sym(), ..*state };
+                (t.sigma, st, UpdateReport::ELASTIC)
+            }
+            Return::Cone { dl, i1, q, k, q_tr } => {
+                // with ‖ξᵗʳ‖ = √2 qᵗʳ, √2 n̂ = ξᵗʳ/qᵗʳ: one division for the whole return.
+                let inv_q = 1.0 / q_tr;
+                let beta = t.beta + t.xi * (self.kin_h * dl * inv_q);
+                let s = T::IDENTITY * (i1 / 3.0) + beta + t.xi * (q * inv_q);
+                // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : ξᵗʳ/(2qᵗʳ).
+                let work = dl * (self.alpha_g * i1 + q + 0.5 * inv_q * beta.ddot(&t.xi));
+                let st = DpState { back_stress: beta.to_sym(), k, eps_p_bar: state.eps_p_bar + dl };
+                let rep =
+                    UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
+                (s, st, rep)
+            }
+            Return::Apex { dl, i1, k } => {
+                // β_{n+1} = β + (1 − M)H Δλ √2 n̂ = β + ((1 − M)H/B) ξᵗʳ.
+                let beta = t.beta + t.xi * (self.kin_h * self.inv_b);
+                let s = T::IDENTITY * (i1 / 3.0) + beta;
+                // σ : C⁻¹ : (σᵗʳ − σ) with σᵗʳ − σ = (I1ᵗʳ − I1)/3 I + (G/B) ξᵗʳ.
+                let work = i1 * (t.i1 - i1) * self.inv_9k + 0.5 * self.inv_b * beta.ddot(&t.xi);
+                let st = DpState { back_stress: beta.to_sym(), k, eps_p_bar: state.eps_p_bar + dl };
+                let rep =
+                    UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };
+                (s, st, rep)
+            }
+        };
+        if new_sigma.finite_probe() != 0.0 {
+            // finite inputs so large that the trial overflowed: refuse, leave inputs untouched.
+            let (component, value) =
+                new_sigma.to_sym().first_non_finite().unwrap_or(("xx", f64::NAN));
+            return Err(ConstitutiveError::NonFiniteStress { component, value });
+        }
+        *sigma = new_sigma;
+        *state = new_state;
+        Ok(report)
     }
 }
 

@@ -16,7 +16,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ConstitutiveError;
 use crate::model::{ConstitutiveModel, TangentModel, UpdateReport, check_finite};
-use crate::tensor::{SymTensor, Tangent, deviatoric_projector, dyad, tangent_axpby};
+use crate::tensor::{
+    PlaneTensor, SymTensor, Symmetric, Tangent, deviatoric_projector, dyad, tangent_axpby,
+};
 
 /// Isotropic linear elasticity, stored as bulk modulus `K` and shear modulus `G` (Pa).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -177,7 +179,43 @@ impl ConstitutiveModel for LinearElastic {
         Ok(UpdateReport::ELASTIC)
     }
 
+    /// the rotation and [`update`](ConstitutiveModel::update) on the four plane-strain
+    /// components, same bits.
+    #[inline(always)]
+    fn update_plane(
+        &self,
+        sigma: &mut PlaneTensor,
+        state: &mut Self::State,
+        d_eps: &PlaneTensor,
+        rotation: Option<(f64, f64)>,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        let start = match rotation {
+            Some((c, s)) => sigma.rotated_z(c, s),
+            None => *sigma,
+        };
+        let lt = self.lame_lambda() * d_eps.trace();
+        let g2 = 2.0 * self.shear;
+        let next = PlaneTensor::new(
+            start.xx + (lt + g2 * d_eps.xx),
+            start.yy + (lt + g2 * d_eps.yy),
+            start.zz + (lt + g2 * d_eps.zz),
+            start.xy + g2 * d_eps.xy,
+        );
+        if start.finite_probe() + d_eps.finite_probe() + next.finite_probe() != 0.0 {
+            // the full update names what is not finite and refuses it.
+            let mut full = start.to_sym();
+            let report = self.update(&mut full, state, &d_eps.to_sym())?;
+            *sigma = PlaneTensor::from_sym(&full);
+            return Ok(report);
+        }
+        *sigma = next;
+        Ok(UpdateReport::ELASTIC)
+    }
+
     fn rotate_state(&self, _state: &mut Self::State, _r: &DMat3) {}
+
+    #[inline(always)]
+    fn rotate_state_z(&self, _state: &mut Self::State, _c: f64, _s: f64) {}
 
     fn equivalent_plastic_strain(&self, _state: &Self::State) -> f64 {
         0.0

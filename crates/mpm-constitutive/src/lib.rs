@@ -65,4 +65,4 @@ pub use drucker_prager::{ConeMatch, DpState, DruckerPrager, DruckerPragerParams}
 pub use elastic::LinearElastic;
 pub use error::ConstitutiveError;
 pub use model::{ConstitutiveModel, Surface, TangentModel, UpdateReport};
-pub use tensor::{SymTensor, Tangent};
+pub use tensor::{PlaneTensor, SymTensor, Symmetric, Tangent};

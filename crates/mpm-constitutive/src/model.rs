@@ -13,7 +13,7 @@ use glam::DMat3;
 
 use crate::elastic::LinearElastic;
 use crate::error::ConstitutiveError;
-use crate::tensor::{SymTensor, Tangent};
+use crate::tensor::{PlaneTensor, SymTensor, Tangent};
 
 /// Which branch the return mapping took.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -91,9 +91,49 @@ pub trait ConstitutiveModel: Send + Sync {
         d_eps: &SymTensor,
     ) -> Result<UpdateReport, ConstitutiveError>;
 
+    /// [`update`](Self::update) in plane strain, after turning `sigma` and the state by
+    /// `rotation = Some((cos θ, sin θ))`, the rotation about z of an objective stress rate
+    /// ([`PlaneTensor::rotated_z`], [`rotate_state_z`](Self::rotate_state_z)).
+    ///
+    /// `sigma` and `d_eps` have no out-of-plane shear, and neither have the state's
+    /// tensor-valued variables (what this update writes keeps it so). An isotropic model creates
+    /// none from in-plane increments, so the result is that of the rotation and `update`; a
+    /// model overrides this to skip the two zero components (Drucker-Prager: same bits, two
+    /// thirds of the work). Returns `Err`, leaving `sigma` and `state` untouched, as `update`.
+    #[inline(always)]
+    fn update_plane(
+        &self,
+        sigma: &mut PlaneTensor,
+        state: &mut Self::State,
+        d_eps: &PlaneTensor,
+        rotation: Option<(f64, f64)>,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        let (mut full, mut st) = (sigma.to_sym(), *state);
+        if let Some((c, s)) = rotation {
+            full = full.rotated_z(c, s);
+            self.rotate_state_z(&mut st, c, s);
+        }
+        let report = self.update(&mut full, &mut st, &d_eps.to_sym())?;
+        *sigma = PlaneTensor::from_sym(&full);
+        *state = st;
+        Ok(report)
+    }
+
     /// Rotates tensor-valued internal variables (e.g. the back stress) by `r` (`β ← R β Rᵀ`), for
     /// objective stress rates. Elastic: no-op.
     fn rotate_state(&self, state: &mut Self::State, r: &DMat3);
+
+    /// [`rotate_state`](Self::rotate_state) by the rotation about z with `c = cos θ`,
+    /// `s = sin θ` (the only one plane strain produces).
+    #[inline(always)]
+    fn rotate_state_z(&self, state: &mut Self::State, c: f64, s: f64) {
+        let r = DMat3::from_cols(
+            glam::DVec3::new(c, s, 0.0),
+            glam::DVec3::new(-s, c, 0.0),
+            glam::DVec3::Z,
+        );
+        self.rotate_state(state, &r);
+    }
 
     /// Equivalent plastic strain `ε̄ᵖ` for output (0 for elasticity).
     fn equivalent_plastic_strain(&self, state: &Self::State) -> f64;

@@ -274,6 +274,215 @@ impl SubAssign for SymTensor {
     }
 }
 
+/// A symmetric tensor without out-of-plane shear (`yz = zx = 0`): the stress and strain of plane
+/// strain, stored as `[xx, yy, zz, xy]` (tensor components, tension positive).
+///
+/// Under plane strain (`Δε_zz = Δε_yz = Δε_zx = 0`) an isotropic model never creates `σ_yz` or
+/// `σ_zx`, so a 2D solver carries four components and each operation costs two thirds of its
+/// [`SymTensor`] counterpart. Every operation is the [`SymTensor`] one with the two zero
+/// components left out, and gives the same bits (a sum gains nothing from an exact `0`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlaneTensor {
+    /// normal component `xx`.
+    pub xx: f64,
+    /// normal component `yy`.
+    pub yy: f64,
+    /// normal component `zz` (out of plane).
+    pub zz: f64,
+    /// shear component `xy = yx` (tensor component).
+    pub xy: f64,
+}
+
+impl PlaneTensor {
+    /// the zero tensor.
+    pub const ZERO: Self = Self::new(0.0, 0.0, 0.0, 0.0);
+
+    /// a tensor from its four components.
+    pub const fn new(xx: f64, yy: f64, zz: f64, xy: f64) -> Self {
+        Self { xx, yy, zz, xy }
+    }
+
+    /// the in-plane part of `t` (its `yz` and `zx` are dropped).
+    #[inline(always)]
+    pub const fn from_sym(t: &SymTensor) -> Self {
+        Self::new(t.xx, t.yy, t.zz, t.xy)
+    }
+
+    /// the full tensor (`yz = zx = 0`).
+    #[inline(always)]
+    pub const fn to_sym(&self) -> SymTensor {
+        SymTensor::new(self.xx, self.yy, self.zz, self.xy, 0.0, 0.0)
+    }
+
+    /// `tr A`.
+    #[inline(always)]
+    pub fn trace(&self) -> f64 {
+        self.xx + self.yy + self.zz
+    }
+
+    /// mean value `tr A / 3` (the mean stress `p`, tension positive).
+    #[inline]
+    pub fn mean(&self) -> f64 {
+        self.trace() / 3.0
+    }
+
+    /// full double contraction `A : B` (the off-diagonal pair counts twice).
+    #[inline(always)]
+    pub fn ddot(&self, o: &Self) -> f64 {
+        self.xx * o.xx + self.yy * o.yy + self.zz * o.zz + 2.0 * (self.xy * o.xy)
+    }
+
+    /// Frobenius norm `√(A : A)`.
+    #[inline]
+    pub fn norm(&self) -> f64 {
+        self.ddot(self).sqrt()
+    }
+
+    /// true when all four components are finite.
+    #[inline(always)]
+    pub fn is_finite(&self) -> bool {
+        Symmetric::finite_probe(self) == 0.0
+    }
+
+    /// `R A Rᵀ` for the rotation about z by θ (c = cos θ, s = sin θ): [`SymTensor::rotated_z`].
+    #[inline(always)]
+    pub fn rotated_z(&self, c: f64, s: f64) -> Self {
+        let (cc, ss, cs) = (c * c, s * s, c * s);
+        Self {
+            xx: cc * self.xx - 2.0 * cs * self.xy + ss * self.yy,
+            yy: ss * self.xx + 2.0 * cs * self.xy + cc * self.yy,
+            zz: self.zz,
+            xy: cs * (self.xx - self.yy) + (cc - ss) * self.xy,
+        }
+    }
+}
+
+/// The arithmetic of a return mapping, on a full [`SymTensor`] or on a [`PlaneTensor`]: a model
+/// written once against it runs in 3D and, at two thirds of the cost, in plane strain.
+pub trait Symmetric:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self>
+{
+    /// the identity `I`.
+    const IDENTITY: Self;
+    /// `tr A`.
+    fn trace(&self) -> f64;
+    /// `A − (tr A / 3) I`.
+    fn deviator(&self) -> Self;
+    /// `A : B` (off-diagonals count twice).
+    fn ddot(&self, other: &Self) -> f64;
+    /// `0` when every component is finite, NaN otherwise ([`SymTensor::finite_probe`]).
+    fn finite_probe(&self) -> f64;
+    /// eq 10's elastic trial `σ + λ tr(Δε) I + 2G Δε` given `lt = λ tr Δε` and `tg = 2G`.
+    fn elastic_trial(&self, lt: f64, tg: f64, d_eps: &Self) -> Self;
+    /// the in-plane part of a full tensor (the identity for [`SymTensor`]).
+    fn from_sym(t: &SymTensor) -> Self;
+    /// the full tensor.
+    fn to_sym(&self) -> SymTensor;
+}
+
+impl Symmetric for SymTensor {
+    const IDENTITY: Self = SymTensor::IDENTITY;
+    #[inline(always)]
+    fn trace(&self) -> f64 {
+        SymTensor::trace(self)
+    }
+    #[inline(always)]
+    fn deviator(&self) -> Self {
+        SymTensor::deviator(self)
+    }
+    #[inline(always)]
+    fn ddot(&self, other: &Self) -> f64 {
+        SymTensor::ddot(self, other)
+    }
+    #[inline(always)]
+    fn finite_probe(&self) -> f64 {
+        SymTensor::finite_probe(self)
+    }
+    #[inline(always)]
+    fn elastic_trial(&self, lt: f64, tg: f64, d: &Self) -> Self {
+        Self::new(
+            self.xx + lt + tg * d.xx,
+            self.yy + lt + tg * d.yy,
+            self.zz + lt + tg * d.zz,
+            self.xy + tg * d.xy,
+            self.yz + tg * d.yz,
+            self.zx + tg * d.zx,
+        )
+    }
+    #[inline(always)]
+    fn from_sym(t: &SymTensor) -> Self {
+        *t
+    }
+    #[inline(always)]
+    fn to_sym(&self) -> SymTensor {
+        *self
+    }
+}
+
+impl Symmetric for PlaneTensor {
+    const IDENTITY: Self = Self::new(1.0, 1.0, 1.0, 0.0);
+    #[inline(always)]
+    fn trace(&self) -> f64 {
+        PlaneTensor::trace(self)
+    }
+    #[inline(always)]
+    fn deviator(&self) -> Self {
+        let m = self.mean();
+        Self::new(self.xx - m, self.yy - m, self.zz - m, self.xy)
+    }
+    #[inline(always)]
+    fn ddot(&self, o: &Self) -> f64 {
+        PlaneTensor::ddot(self, o)
+    }
+    #[inline(always)]
+    // x − x is the point: 0 for finite x, NaN otherwise.
+    #[allow(clippy::eq_op)]
+    fn finite_probe(&self) -> f64 {
+        ((self.xx - self.xx) + (self.yy - self.yy)) + ((self.zz - self.zz) + (self.xy - self.xy))
+    }
+    #[inline(always)]
+    fn elastic_trial(&self, lt: f64, tg: f64, d: &Self) -> Self {
+        Self::new(
+            self.xx + lt + tg * d.xx,
+            self.yy + lt + tg * d.yy,
+            self.zz + lt + tg * d.zz,
+            self.xy + tg * d.xy,
+        )
+    }
+    #[inline(always)]
+    fn from_sym(t: &SymTensor) -> Self {
+        PlaneTensor::from_sym(t)
+    }
+    #[inline(always)]
+    fn to_sym(&self) -> SymTensor {
+        PlaneTensor::to_sym(self)
+    }
+}
+
+impl Add for PlaneTensor {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.xx + o.xx, self.yy + o.yy, self.zz + o.zz, self.xy + o.xy)
+    }
+}
+
+impl Sub for PlaneTensor {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.xx - o.xx, self.yy - o.yy, self.zz - o.zz, self.xy - o.xy)
+    }
+}
+
+impl Mul<f64> for PlaneTensor {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, a: f64) -> Self {
+        Self::new(self.xx * a, self.yy * a, self.zz * a, self.xy * a)
+    }
+}
+
 /// `T · dε` for a [`Tangent`] and a tensor strain increment (storage order, tensor shear).
 pub fn tangent_apply(t: &Tangent, d_eps: &SymTensor) -> SymTensor {
     let e = d_eps.to_array();

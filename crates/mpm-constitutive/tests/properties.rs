@@ -9,7 +9,7 @@
 use glam::{DMat3, DQuat, DVec3};
 use mpm_constitutive::{
     ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
-    Surface, SymTensor, UpdateReport,
+    LinearElastic, PlaneTensor, Surface, SymTensor, UpdateReport,
 };
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
@@ -261,6 +261,24 @@ proptest! {
         prop_assert!((rep2.delta_lambda - rep1.delta_lambda).abs() <= ROTATION_TOL * scale / g);
     }
 
+    /// The plane-strain update (the solver's) gives the bits of the full update of the same
+    /// in-plane point, rotation included, for Drucker-Prager, linear elasticity and a model
+    /// that keeps the trait's default `update_plane`: it is the same algorithm, not an
+    /// approximation of it.
+    #[test]
+    fn plane_update_gives_the_bits_of_the_full_update(
+        (m, sigma, state, d) in case(),
+        theta in prop_oneof![Just(None), (-0.05..0.05f64).prop_map(Some)],
+    ) {
+        let sigma = PlaneTensor::from_sym(&sigma);
+        let state = DpState { back_stress: PlaneTensor::from_sym(&state.back_stress).to_sym(), ..state };
+        let d = PlaneTensor::new(d.xx, d.yy, 0.0, d.xy);
+        let rotation = theta.map(|t: f64| (t.cos(), t.sin()));
+        same_bits(&m, sigma, state, d, rotation)?;
+        same_bits(m.elasticity(), sigma, (), d, rotation)?;
+        same_bits(&DefaultPlane(*m.elasticity()), sigma, (), d, rotation)?;
+    }
+
     #[test]
     fn outputs_are_finite((m, sigma, state, d) in case()) {
         let (mut s, mut st) = (sigma, state);
@@ -322,6 +340,65 @@ proptest! {
             }
         }
     }
+}
+
+/// linear elasticity through the trait's default `update_plane` and `rotate_state_z`.
+struct DefaultPlane(LinearElastic);
+
+impl ConstitutiveModel for DefaultPlane {
+    type State = ();
+    const IS_PLASTIC: bool = false;
+    fn initial_state(&self) {}
+    fn elasticity(&self) -> &LinearElastic {
+        &self.0
+    }
+    fn update(
+        &self,
+        sigma: &mut SymTensor,
+        state: &mut (),
+        d_eps: &SymTensor,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        self.0.update(sigma, state, d_eps)
+    }
+    fn rotate_state(&self, _state: &mut (), _r: &DMat3) {}
+    fn equivalent_plastic_strain(&self, _state: &()) -> f64 {
+        0.0
+    }
+}
+
+/// `update_plane` against the rotation (`SymTensor::rotated_z`, `rotate_state_z`) and `update`
+/// of the full tensors: the same result, report and error, bit for bit.
+fn same_bits<M: ConstitutiveModel>(
+    m: &M,
+    sigma: PlaneTensor,
+    state: M::State,
+    d: PlaneTensor,
+    rotation: Option<(f64, f64)>,
+) -> Result<(), TestCaseError> {
+    let (mut full, mut full_state) = (sigma.to_sym(), state);
+    if let Some((c, s)) = rotation {
+        full = full.rotated_z(c, s);
+        m.rotate_state_z(&mut full_state, c, s);
+    }
+    let expected = m.update(&mut full, &mut full_state, &d.to_sym());
+    let (mut plane, mut plane_state) = (sigma, state);
+    let got = m.update_plane(&mut plane, &mut plane_state, &d, rotation);
+    match (expected, got) {
+        (Ok(a), Ok(b)) => {
+            prop_assert_eq!(a, b);
+            let bits = |t: SymTensor| t.to_array().map(f64::to_bits);
+            prop_assert_eq!(bits(plane.to_sym()), bits(PlaneTensor::from_sym(&full).to_sym()));
+            prop_assert!(full.yz == 0.0 && full.zx == 0.0, "{:?}", full);
+            prop_assert_eq!(plane_state, full_state);
+        }
+        (Err(a), Err(b)) => {
+            prop_assert_eq!(a.to_string(), b.to_string());
+            prop_assert_eq!(plane, sigma);
+            prop_assert_eq!(plane_state, state);
+        }
+        (a, b) => prop_assert!(false, "full {:?} against plane {:?}", a, b),
+    }
+    Ok(())
 }
 
 /// the random cases must exercise every branch, or the properties above prove little.

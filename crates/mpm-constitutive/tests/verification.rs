@@ -8,7 +8,7 @@ use mpm_constitutive::element_test::{
 };
 use mpm_constitutive::{
     ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
-    LinearElastic, Surface, SymTensor,
+    LinearElastic, PlaneTensor, Surface, SymTensor,
 };
 
 /// the acceptance tolerance on the paper's quoted numbers (0.1 %).
@@ -618,6 +618,21 @@ mod validation {
                 && st0.eps_p_bar.is_finite()
                 && st0.back_stress.is_finite();
             assert_eq!(m.consistent_tangent(&s0, &st0, &d).is_err(), !inputs_finite);
+            // The plane-strain update (turned or not) refuses the in-plane ones alike.
+            if d.yz != 0.0 || d.zx != 0.0 {
+                continue;
+            }
+            let (sp0, dp) = (PlaneTensor::from_sym(&s0), PlaneTensor::from_sym(&d));
+            for rotation in [None, Some((0.6, 0.8))] {
+                let (mut sp, mut stp) = (sp0, st0);
+                let e = m.update_plane(&mut sp, &mut stp, &dp, rotation).unwrap_err();
+                if rotation.is_none() {
+                    // (turned, a NaN spreads to other components and the name may differ)
+                    assert_eq!(e.to_string(), r.as_ref().unwrap_err().to_string());
+                }
+                assert_eq!(sp, sp0);
+                assert_eq!(stp.k.to_bits(), st0.k.to_bits());
+            }
         }
         let (mut s, mut st) = (sigma0, state0);
         let msg = m

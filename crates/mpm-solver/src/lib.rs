@@ -13,7 +13,7 @@
 //! stress and strain. Equation numbers refer to the paper.
 //!
 //! ```
-//! use mpm_constitutive::{LinearElastic, SymTensor};
+//! use mpm_constitutive::{LinearElastic, PlaneTensor};
 //! use mpm_grid::{Bilinear, RegularGrid};
 //! use mpm_solver::{generate, NewParticle, Particles, Solver, SolverConfig, Vector};
 //!
@@ -28,7 +28,7 @@
 //!         velocity: Vector::ZERO,
 //!         volume: seed.area,
 //!         density: 1000.0,
-//!         stress: SymTensor::ZERO,
+//!         stress: PlaneTensor::ZERO,
 //!         state: (),
 //!         material: 0,
 //!         body: 0,

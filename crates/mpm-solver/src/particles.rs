@@ -2,11 +2,11 @@
 //!
 //! Glossary: p particle index; m_p mass (kg per metre of thickness); V_p volume (m³ per metre, i.e. the
 //! area the point stands for); ρ_p = m_p / V_p density; x_p position; v_p velocity; σ_p Cauchy stress,
-//! **tension positive**, full 3D symmetric tensor with σ_zz carried (plane strain).
+//! **tension positive**, the four components plane strain leaves (σ_zz carried, σ_yz = σ_zx = 0).
 //! Each array has one entry per particle; index p refers to the same particle in every array.
 
 use crate::math::{Matrix, Real, Vector};
-use mpm_constitutive::SymTensor;
+use mpm_constitutive::PlaneTensor;
 use serde::{Deserialize, Serialize};
 
 /// All particles of a scene. `S` is the constitutive model's internal state (`()` for elasticity).
@@ -20,8 +20,8 @@ pub struct Particles<S> {
     pub mass: Vec<Real>,
     /// Current volume V_p (m² per metre of thickness), updated by eq 12.
     pub volume: Vec<Real>,
-    /// Cauchy stress σ_p (Pa, tension positive).
-    pub stress: Vec<SymTensor>,
+    /// Cauchy stress σ_p (Pa, tension positive; `[xx, yy, zz, xy]`).
+    pub stress: Vec<PlaneTensor>,
     /// Constitutive internal variables.
     pub state: Vec<S>,
     /// Index into the solver's material list.
@@ -65,7 +65,7 @@ pub struct NewParticle<S> {
     /// Density (kg/m³).
     pub density: Real,
     /// Initial stress (Pa, tension positive).
-    pub stress: SymTensor,
+    pub stress: PlaneTensor,
     /// Initial internal state.
     pub state: S,
     /// Material index.
@@ -89,7 +89,7 @@ impl<S> NewParticle<S> {
             velocity,
             volume,
             density,
-            stress: SymTensor::ZERO,
+            stress: PlaneTensor::ZERO,
             state,
             material: 0,
             body: 0,

@@ -17,7 +17,7 @@
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU32};
 
-use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
 use mpm_contact::Boundary;
 use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
 use serde::{Deserialize, Serialize};
@@ -509,7 +509,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let p = &self.particles;
         p.position.capacity() * size_of::<Vector>() * 3
             + (p.mass.capacity() + p.volume.capacity()) * size_of::<Real>()
-            + p.stress.capacity() * size_of::<SymTensor>()
+            + p.stress.capacity() * size_of::<PlaneTensor>()
             + p.state.capacity() * size_of::<M::State>()
             + (p.material.capacity() + p.body.capacity()) * size_of::<u16>()
             + p.affine.capacity() * size_of::<Matrix>()
@@ -523,7 +523,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let kinetic = par::sum(p.len(), |i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
         let strain = par::sum(p.len(), |i| {
             let m = &self.materials[usize::from(p.material[i])];
-            p.volume[i] * m.elasticity().strain_energy_density(&p.stress[i])
+            p.volume[i] * m.elasticity().strain_energy_density(&p.stress[i].to_sym())
         });
         let potential = par::sum(p.len(), |i| -p.mass[i] * g.dot(p.position[i]));
         let mut e = EnergyLedger {
@@ -689,7 +689,7 @@ pub fn estimated_bytes(
 ) -> u64 {
     let per_particle = 3 * size_of::<Vector>()
         + 2 * size_of::<Real>()
-        + size_of::<SymTensor>()
+        + size_of::<PlaneTensor>()
         + state_bytes
         + 2 * size_of::<u16>()
         + if apic { size_of::<Matrix>() } else { 0 }

@@ -15,7 +15,7 @@
 //! particle is read once per pass (the node-list gather this replaced read it once per node)
 //! and the partial sums stay in a few kilobytes of cache.
 
-use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
 use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_side};
 use std::sync::atomic::Ordering;
 
@@ -216,7 +216,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 /// σ·G in the plane of the analysis (plane strain: σ_zz does not act on an in-plane gradient).
 #[inline(always)]
-fn in_plane(s: &SymTensor, g: Vector) -> Vector {
+fn in_plane(s: &PlaneTensor, g: Vector) -> Vector {
     Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y)
 }
 

@@ -8,8 +8,7 @@
 //! stress magnitude unchanged under rigid rotation. Then the constitutive update (eqs 10–11 or
 //! 23–25) and the volume V_p ← V_p (1 + tr Δε) (eq 12, ρ ← ρ / (1 + tr Δε)).
 
-use glam::{DMat3, DVec3};
-use mpm_constitutive::{ConstitutiveModel, Surface, SymTensor};
+use mpm_constitutive::{ConstitutiveModel, PlaneTensor, Surface};
 use mpm_grid::{ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
@@ -132,31 +131,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     }
                     let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
                     let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
-                    let d_eps = SymTensor::plane(dt * lxx, dt * lyy, 0.5 * dt * (lxy + lyx));
+                    let d_eps = PlaneTensor::new(dt * lxx, dt * lyy, 0.0, 0.5 * dt * (lxy + lyx));
                     let model = &materials[usize::from(material[q])];
-                    if objective {
-                        let theta = 0.5 * dt * (lyx - lxy);
-                        if theta != 0.0 {
-                            let (cos, sin) = cos_sin(theta);
-                            stress[j] = stress[j].rotated_z(cos, sin);
-                            let r = DMat3::from_cols(
-                                DVec3::new(cos, sin, 0.0),
-                                DVec3::new(-sin, cos, 0.0),
-                                DVec3::Z,
-                            );
-                            model.rotate_state(&mut state[j], &r);
-                        }
-                    }
-                    let report =
-                        model.update(&mut stress[j], &mut state[j], &d_eps).map_err(|source| {
-                            SolverError::Constitutive {
-                                step,
-                                particle: q,
-                                position: position[q],
-                                source,
-                            }
+                    let theta = 0.5 * dt * (lyx - lxy);
+                    let rotation = (objective && theta != 0.0).then(|| cos_sin(theta));
+                    let report = model
+                        .update_plane(&mut stress[j], &mut state[j], &d_eps, rotation)
+                        .map_err(|source| SolverError::Constitutive {
+                            step,
+                            particle: q,
+                            position: position[q],
+                            source,
                         })?;
-                    let ratio = 1.0 + d_eps.trace();
+                    let ratio = 1.0 + (d_eps.xx + d_eps.yy + d_eps.zz);
                     if ratio.is_nan() || ratio <= 0.0 {
                         return Err(SolverError::Inverted {
                             step,
@@ -237,7 +224,7 @@ fn cos_sin(theta: Real) -> (Real, Real) {
 
 #[cfg(test)]
 mod tests {
-    use mpm_constitutive::{LinearElastic, SymTensor};
+    use mpm_constitutive::{LinearElastic, PlaneTensor};
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
@@ -246,10 +233,10 @@ mod tests {
 
     /// A single stressed particle whose nodes carry the rigid rotation v = Ω ẑ × (x − c): with the
     /// objective rate its stress turns with the body and keeps its magnitude; without, it stays put.
-    fn spin(objective: bool) -> (SymTensor, SymTensor) {
+    fn spin(objective: bool) -> (PlaneTensor, PlaneTensor) {
         let grid = RegularGrid::new(Vector::ZERO, Vector::ONE, [4, 4]).unwrap();
         let mut particles = Particles::default();
-        let sigma0 = SymTensor::new(-100.0, -20.0, -36.0, 15.0, 0.0, 0.0);
+        let sigma0 = PlaneTensor::new(-100.0, -20.0, -36.0, 15.0);
         particles.push(NewParticle {
             position: Vector::new(1.3, 2.6),
             velocity: Vector::ZERO,
