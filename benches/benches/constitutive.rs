@@ -1,6 +1,7 @@
 //! Constitutive kernels: one stress update per material point on the elastic path (linear
 //! elasticity and the Drucker-Prager elastic branch), the Drucker-Prager cone return and the
-//! apex return.
+//! apex return; `*_plane` is the solver's call, `update_plane` on in-plane points turned by an
+//! objective rotation first.
 //!
 //! Throughput is set to the number of updates per iteration, so criterion's "elements/s" is
 //! updates per second on one core (target: ≥ 15 M plastic updates/s). Inputs are seeded
@@ -15,7 +16,8 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mpm_benches::SplitMix64;
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams, Surface, SymTensor,
+    ConeMatch, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams, PlaneTensor,
+    Surface, SymTensor,
 };
 
 /// updates per benchmark iteration: enough to amortise the loop, few enough to stay in L1/L2.
@@ -39,14 +41,17 @@ fn sand() -> DruckerPrager {
     .expect("valid parameters")
 }
 
-fn tensor(rng: &mut SplitMix64, scale: f64) -> SymTensor {
-    SymTensor::from_array([0; 6].map(|_| rng.uniform(-scale, scale)))
+/// a random tensor; with `plane`, without out-of-plane shear.
+fn tensor(rng: &mut SplitMix64, scale: f64, plane: bool) -> SymTensor {
+    let t = SymTensor::from_array([0; 6].map(|_| rng.uniform(-scale, scale)));
+    if plane { PlaneTensor::from_sym(&t).to_sym() } else { t }
 }
 
 /// seeded inputs whose update takes `surface`: compressed states (mean −1e3 .. −1e2 Pa) with a
 /// back stress, and increments of the kind each branch needs.
-fn inputs(m: &DruckerPrager, surface: Surface, seed: u64) -> Vec<Input> {
+fn inputs(m: &DruckerPrager, surface: Surface, seed: u64, plane: bool) -> Vec<Input> {
     let mut rng = SplitMix64::new(seed);
+    let tensor = |rng: &mut SplitMix64, scale| tensor(rng, scale, plane);
     let mut out = Vec::with_capacity(POINTS);
     while out.len() < POINTS {
         let p = rng.uniform(-1.0e3, -1.0e2);
@@ -73,6 +78,30 @@ fn inputs(m: &DruckerPrager, surface: Surface, seed: u64) -> Vec<Input> {
     out
 }
 
+/// the rotation (cos θ, sin θ) of the plane benches: a spin of 1e-4 rad per step.
+const TURN: (f64, f64) = (0.999_999_995, 1e-4);
+
+fn bench_dp_plane(c: &mut Criterion, name: &str, m: &DruckerPrager, input: &[Input]) {
+    let input: Vec<_> = input
+        .iter()
+        .map(|(s, st, d)| (PlaneTensor::from_sym(s), *st, PlaneTensor::from_sym(d)))
+        .collect();
+    let mut group = c.benchmark_group("constitutive");
+    group.throughput(Throughput::Elements(input.len() as u64));
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for (sigma, state, d_eps) in black_box(&input) {
+                let (mut s, mut st) = (*sigma, *state);
+                let rep = m.update_plane(&mut s, &mut st, d_eps, Some(TURN));
+                acc += black_box(s).xx + rep.map_or(0.0, |r| r.delta_lambda);
+            }
+            acc
+        })
+    });
+    group.finish();
+}
+
 fn bench_dp(c: &mut Criterion, name: &str, m: &DruckerPrager, input: &[Input]) {
     let mut group = c.benchmark_group("constitutive");
     group.throughput(Throughput::Elements(input.len() as u64));
@@ -96,7 +125,7 @@ fn constitutive(c: &mut Criterion) {
     let elastic = *m.elasticity();
     let el_input: Vec<(SymTensor, SymTensor)> = {
         let mut rng = SplitMix64::new(0x656c_6173);
-        (0..POINTS).map(|_| (tensor(&mut rng, 1e3), tensor(&mut rng, 1e-4))).collect()
+        (0..POINTS).map(|_| (tensor(&mut rng, 1e3, false), tensor(&mut rng, 1e-4, false))).collect()
     };
     let mut group = c.benchmark_group("constitutive");
     group.throughput(Throughput::Elements(POINTS as u64));
@@ -113,9 +142,12 @@ fn constitutive(c: &mut Criterion) {
     });
     group.finish();
 
-    bench_dp(c, "dp_elastic", &m, &inputs(&m, Surface::Elastic, 0x6470_656c));
-    bench_dp(c, "dp_cone", &m, &inputs(&m, Surface::Cone, 0x636f_6e65));
-    bench_dp(c, "dp_apex", &m, &inputs(&m, Surface::Apex, 0x6170_6578));
+    bench_dp(c, "dp_elastic", &m, &inputs(&m, Surface::Elastic, 0x6470_656c, false));
+    bench_dp(c, "dp_cone", &m, &inputs(&m, Surface::Cone, 0x636f_6e65, false));
+    bench_dp(c, "dp_apex", &m, &inputs(&m, Surface::Apex, 0x6170_6578, false));
+    // the turn keeps each point on its branch: it is small against the increments.
+    bench_dp_plane(c, "dp_elastic_plane", &m, &inputs(&m, Surface::Elastic, 0x6470_656c, true));
+    bench_dp_plane(c, "dp_cone_plane", &m, &inputs(&m, Surface::Cone, 0x636f_6e65, true));
 
     // the paper's cohesionless, non-dilatant limit (c = 0, ψ = 0): the separating-sand apex.
     let loose = DruckerPrager::new(DruckerPragerParams {
@@ -125,7 +157,7 @@ fn constitutive(c: &mut Criterion) {
         ..*m.params()
     })
     .expect("valid parameters");
-    bench_dp(c, "dp_apex_c0_psi0", &loose, &inputs(&loose, Surface::Apex, 0x6c6f_6f73));
+    bench_dp(c, "dp_apex_c0_psi0", &loose, &inputs(&loose, Surface::Apex, 0x6c6f_6f73, false));
 }
 
 criterion_group!(benches, constitutive);

@@ -5,7 +5,9 @@
 //! MPM" (eq 10–11: elastic increment; eqs 23–25: Drucker-Prager yield function, plastic potential
 //! and flow rule), on full 3D symmetric tensors so that 2D (plane strain: `Δε_zz = Δε_yz =
 //! Δε_zx = 0`, `σ_zz` carried) and 3D codes can both use it. It knows nothing of grids or
-//! particles: a solver calls [`ConstitutiveModel::update`] once per material point and step.
+//! particles: a solver calls [`ConstitutiveModel::update`] once per material point and step, or,
+//! in plane strain, [`ConstitutiveModel::update_plane`] on the four components that remain
+//! ([`PlaneTensor`]), which gives the same bits at two thirds of the work.
 //!
 //! # Glossary
 //! - `σ` stress, `ε` strain ([`SymTensor`], storage `[xx, yy, zz, xy, yz, zx]`, tensor shear
@@ -19,7 +21,8 @@
 //! Units: SI (Pa, J/m³, kg/m³, m/s); angles in degrees in parameter structs.
 //!
 //! # Map
-//! - [`tensor`]: [`SymTensor`] and the 6×6 [`Tangent`] convention.
+//! - [`tensor`]: [`SymTensor`], the 6×6 [`Tangent`] convention, [`PlaneTensor`] and
+//!   [`Symmetric`], the arithmetic the return mappings are written against once for both.
 //! - [`elastic`]: [`LinearElastic`] (eq 10), wave speeds for the time step (eq 13).
 //! - [`model`]: the [`ConstitutiveModel`] trait a solver uses, [`UpdateReport`], [`Surface`],
 //!   and [`TangentModel`].
