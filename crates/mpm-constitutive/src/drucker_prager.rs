@@ -391,6 +391,18 @@ impl DruckerPrager {
         }
     }
 
+    /// the error for a back stress with out-of-plane parts `(yz, zx)`, not both 0.
+    #[cold]
+    #[inline(never)]
+    fn out_of_plane(yz: f64, zx: f64) -> ConstitutiveError {
+        let (name, value) = if yz != 0.0 { ("back_stress.yz", yz) } else { ("back_stress.zx", zx) };
+        if value.is_finite() {
+            ConstitutiveError::OutOfPlane { name, value }
+        } else {
+            ConstitutiveError::NonFiniteState { name, value }
+        }
+    }
+
     /// names the first non-finite input (the slow path of [`check_inputs`](Self::check_inputs)).
     #[cold]
     #[inline(never)]
@@ -477,8 +489,6 @@ impl ConstitutiveModel for DruckerPrager {
         &self.elastic
     }
 
-    // Inlined into the solver's particle loop: called out of line, the just-rotated stress went
-    // through memory and its wide loads stalled on the narrow stores (flume: 13 % of the run).
     #[inline(always)]
     fn update(
         &self,
@@ -490,8 +500,10 @@ impl ConstitutiveModel for DruckerPrager {
         self.update_in(sigma, *sigma, back_stress, state, d_eps)
     }
 
-    // The turned stress and back stress stay in registers: stored and read back, their wide
-    // loads stalled on the narrow stores (flume: 10 % of the run).
+    // Inlined into the solver's particle loop (called out of line, the stress went through
+    // memory and its wide loads stalled on the narrow stores: flume 13 % of the run), and the
+    // turned stress and back stress stay in registers (stored and read back, the same stall:
+    // 10 %).
     #[inline(always)]
     fn update_plane(
         &self,
@@ -500,6 +512,11 @@ impl ConstitutiveModel for DruckerPrager {
         d_eps: &PlaneTensor,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
+        let (yz, zx) = (state.back_stress.yz, state.back_stress.zx);
+        if yz != 0.0 || zx != 0.0 {
+            // (NaN included) a back stress plane strain cannot carry: refused, not dropped.
+            return Err(Self::out_of_plane(yz, zx));
+        }
         let back_stress = PlaneTensor::from_sym(&state.back_stress);
         match rotation {
             Some((c, s)) => {

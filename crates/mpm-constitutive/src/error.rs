@@ -53,6 +53,18 @@ pub enum ConstitutiveError {
         /// the offending value.
         value: f64,
     },
+    /// a plane-strain update met (or would create) an out-of-plane shear, which the four
+    /// components of plane strain cannot carry.
+    #[error(
+        "plane strain: `{name}` = {value} is an out-of-plane shear, which plane strain keeps at 0 \
+         (use the full update for a 3D state)"
+    )]
+    OutOfPlane {
+        /// the quantity (`"stress.yz"`, `"back_stress.zx"`, ...).
+        name: &'static str,
+        /// its value.
+        value: f64,
+    },
     /// a friction-free cone (α = 0) softened to a negative size: no stress satisfies `f ≤ 0`.
     #[error(
         "the yield surface is empty: cone size k = {k} Pa < 0 with friction coefficient alpha = 0 \

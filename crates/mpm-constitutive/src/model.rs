@@ -98,8 +98,10 @@ pub trait ConstitutiveModel: Send + Sync {
     /// `sigma` and `d_eps` have no out-of-plane shear, and neither have the state's
     /// tensor-valued variables (what this update writes keeps it so). An isotropic model creates
     /// none from in-plane increments, so the result is that of the rotation and `update`; a
-    /// model overrides this to skip the two zero components (Drucker-Prager: same bits, two
-    /// thirds of the work). Returns `Err`, leaving `sigma` and `state` untouched, as `update`.
+    /// model overrides this to skip the two zero components (Drucker-Prager: same results, two
+    /// thirds of the work). Returns `Err`, leaving `sigma` and `state` untouched, as `update`
+    /// does, and [`ConstitutiveError::OutOfPlane`] where the update would create an out-of-plane
+    /// stress (a state with out-of-plane parts): never a result with a shear silently dropped.
     #[inline(always)]
     fn update_plane(
         &self,
@@ -114,6 +116,11 @@ pub trait ConstitutiveModel: Send + Sync {
             self.rotate_state_z(&mut st, c, s);
         }
         let report = self.update(&mut full, &mut st, &d_eps.to_sym())?;
+        for (name, value) in [("stress.yz", full.yz), ("stress.zx", full.zx)] {
+            if value != 0.0 {
+                return Err(ConstitutiveError::OutOfPlane { name, value });
+            }
+        }
         *sigma = PlaneTensor::from_sym(&full);
         *state = st;
         Ok(report)

@@ -280,7 +280,8 @@ impl SubAssign for SymTensor {
 /// Under plane strain (`Δε_zz = Δε_yz = Δε_zx = 0`) an isotropic model never creates `σ_yz` or
 /// `σ_zx`, so a 2D solver carries four components and each operation costs two thirds of its
 /// [`SymTensor`] counterpart. Every operation is the [`SymTensor`] one with the two zero
-/// components left out, and gives the same bits (a sum gains nothing from an exact `0`).
+/// components left out, and gives the same bits up to the sign of a zero result (a sum gains
+/// nothing from an exact `0`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlaneTensor {
     /// normal component `xx`.

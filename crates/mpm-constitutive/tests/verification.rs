@@ -630,9 +630,26 @@ mod validation {
                     // (turned, a NaN spreads to other components and the name may differ)
                     assert_eq!(e.to_string(), r.as_ref().unwrap_err().to_string());
                 }
-                assert_eq!(sp, sp0);
+                let bits = |t: SymTensor| t.to_array().map(f64::to_bits);
+                assert_eq!(bits(sp.to_sym()), bits(sp0.to_sym()));
+                assert_eq!(bits(stp.back_stress), bits(st0.back_stress));
                 assert_eq!(stp.k.to_bits(), st0.k.to_bits());
+                assert_eq!(stp.eps_p_bar.to_bits(), st0.eps_p_bar.to_bits());
             }
+        }
+        // A back stress plane strain cannot carry is refused by name, not dropped.
+        for (value, expected) in [(1.0, "out-of-plane"), (f64::NAN, "not finite")] {
+            let st0 =
+                DpState { back_stress: SymTensor::new(0.0, 0.0, 0.0, 0.0, 0.0, value), ..state0 };
+            let (sp0, mut stp) = (PlaneTensor::from_sym(&sigma0), st0);
+            let mut sp = sp0;
+            let e = m.update_plane(&mut sp, &mut stp, &PlaneTensor::ZERO, None).unwrap_err();
+            assert!(e.to_string().contains("back_stress.zx") && e.to_string().contains(expected));
+            assert_eq!(sp, sp0);
+            assert_eq!(
+                stp.back_stress.to_array().map(f64::to_bits),
+                st0.back_stress.to_array().map(f64::to_bits)
+            );
         }
         let (mut s, mut st) = (sigma0, state0);
         let msg = m

@@ -143,7 +143,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             position: position[q],
                             source,
                         })?;
-                    let ratio = 1.0 + (d_eps.xx + d_eps.yy + d_eps.zz);
+                    let ratio = 1.0 + d_eps.trace();
                     if ratio.is_nan() || ratio <= 0.0 {
                         return Err(SolverError::Inverted {
                             step,
