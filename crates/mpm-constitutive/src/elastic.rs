@@ -119,16 +119,33 @@ impl LinearElastic {
     /// eq 10: `Δσ = λ tr(Δε) I + 2G Δε`.
     #[inline]
     pub fn stress_increment(&self, d_eps: &SymTensor) -> SymTensor {
-        let lt = self.lame_lambda() * d_eps.trace();
-        let g2 = 2.0 * self.shear;
-        SymTensor::new(
-            lt + g2 * d_eps.xx,
-            lt + g2 * d_eps.yy,
-            lt + g2 * d_eps.zz,
-            g2 * d_eps.xy,
-            g2 * d_eps.yz,
-            g2 * d_eps.zx,
-        )
+        self.increment(d_eps)
+    }
+
+    /// [`stress_increment`](Self::stress_increment) on full or plane-strain tensors.
+    #[inline(always)]
+    fn increment<T: Symmetric>(&self, d_eps: &T) -> T {
+        d_eps.elastic_increment(self.lame_lambda() * d_eps.trace(), 2.0 * self.shear)
+    }
+
+    /// eqs 10–11, `σ ← start + Δσ`, on full or plane-strain tensors: writes `sigma` only when
+    /// the inputs and the result are finite, else names the first culprit.
+    #[inline(always)]
+    fn update_in<T: Symmetric>(
+        &self,
+        sigma: &mut T,
+        start: T,
+        d_eps: &T,
+    ) -> Result<UpdateReport, ConstitutiveError> {
+        let next = start + self.increment(d_eps);
+        if start.finite_probe() + d_eps.finite_probe() + next.finite_probe() != 0.0 {
+            check_finite(&start.to_sym(), &d_eps.to_sym())?;
+            // finite inputs whose sum overflows: refuse rather than store an infinite stress.
+            let (component, value) = next.to_sym().first_non_finite().unwrap_or(("xx", f64::NAN));
+            return Err(ConstitutiveError::NonFiniteStress { component, value });
+        }
+        *sigma = next;
+        Ok(UpdateReport::ELASTIC)
     }
 
     /// `C⁻¹ : σ = tr(σ)/(9K) I + dev(σ)/(2G)`, the elastic strain carrying `σ`.
@@ -168,15 +185,7 @@ impl ConstitutiveModel for LinearElastic {
         _state: &mut Self::State,
         d_eps: &SymTensor,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        check_finite(sigma, d_eps)?;
-        let next = *sigma + self.stress_increment(d_eps);
-        if !next.is_finite() {
-            // finite inputs whose sum overflows: refuse rather than store an infinite stress.
-            let (component, value) = next.first_non_finite().unwrap_or(("xx", f64::NAN));
-            return Err(ConstitutiveError::NonFiniteStress { component, value });
-        }
-        *sigma = next;
-        Ok(UpdateReport::ELASTIC)
+        self.update_in(sigma, *sigma, d_eps)
     }
 
     /// the rotation and [`update`](ConstitutiveModel::update) on the four plane-strain
@@ -185,7 +194,7 @@ impl ConstitutiveModel for LinearElastic {
     fn update_plane(
         &self,
         sigma: &mut PlaneTensor,
-        state: &mut Self::State,
+        _state: &mut Self::State,
         d_eps: &PlaneTensor,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
@@ -193,23 +202,7 @@ impl ConstitutiveModel for LinearElastic {
             Some((c, s)) => sigma.rotated_z(c, s),
             None => *sigma,
         };
-        let lt = self.lame_lambda() * d_eps.trace();
-        let g2 = 2.0 * self.shear;
-        let next = PlaneTensor::new(
-            start.xx + (lt + g2 * d_eps.xx),
-            start.yy + (lt + g2 * d_eps.yy),
-            start.zz + (lt + g2 * d_eps.zz),
-            start.xy + g2 * d_eps.xy,
-        );
-        if start.finite_probe() + d_eps.finite_probe() + next.finite_probe() != 0.0 {
-            // the full update names what is not finite and refuses it.
-            let mut full = start.to_sym();
-            let report = self.update(&mut full, state, &d_eps.to_sym())?;
-            *sigma = PlaneTensor::from_sym(&full);
-            return Ok(report);
-        }
-        *sigma = next;
-        Ok(UpdateReport::ELASTIC)
+        self.update_in(sigma, start, d_eps)
     }
 
     fn rotate_state(&self, _state: &mut Self::State, _r: &DMat3) {}

@@ -131,15 +131,8 @@ impl SymTensor {
     /// s = sin θ: the in-plane block turns by θ, (A_zx, A_yz) turns as a vector and A_zz stays.
     #[inline]
     pub fn rotated_z(&self, c: f64, s: f64) -> Self {
-        let (cc, ss, cs) = (c * c, s * s, c * s);
-        Self {
-            xx: cc * self.xx - 2.0 * cs * self.xy + ss * self.yy,
-            yy: ss * self.xx + 2.0 * cs * self.xy + cc * self.yy,
-            zz: self.zz,
-            xy: cs * (self.xx - self.yy) + (cc - ss) * self.xy,
-            yz: s * self.zx + c * self.yz,
-            zx: c * self.zx - s * self.yz,
-        }
+        let p = PlaneTensor::from_sym(self).rotated_z(c, s);
+        Self::new(p.xx, p.yy, p.zz, p.xy, s * self.zx + c * self.yz, c * self.zx - s * self.yz)
     }
 
     /// true when all six components are finite.
@@ -373,8 +366,12 @@ pub trait Symmetric:
     fn ddot(&self, other: &Self) -> f64;
     /// `0` when every component is finite, NaN otherwise ([`SymTensor::finite_probe`]).
     fn finite_probe(&self) -> f64;
-    /// eq 10's elastic trial `σ + λ tr(Δε) I + 2G Δε` given `lt = λ tr Δε` and `tg = 2G`.
+    /// eq 10's elastic trial `σ + λ tr(Δε) I + 2G Δε` given `lt = λ tr Δε` and `tg = 2G`,
+    /// summed as `(σ + λ tr Δε) + 2G Δε` (Drucker-Prager's order).
     fn elastic_trial(&self, lt: f64, tg: f64, d_eps: &Self) -> Self;
+    /// eq 10's increment `λ tr(Δε) I + 2G Δε` of the strain increment `self`, given
+    /// `lt = λ tr Δε` and `g2 = 2G` (linear elasticity adds it to σ).
+    fn elastic_increment(&self, lt: f64, g2: f64) -> Self;
     /// the in-plane part of a full tensor (the identity for [`SymTensor`]).
     fn from_sym(t: &SymTensor) -> Self;
     /// the full tensor.
@@ -408,6 +405,17 @@ impl Symmetric for SymTensor {
             self.xy + tg * d.xy,
             self.yz + tg * d.yz,
             self.zx + tg * d.zx,
+        )
+    }
+    #[inline(always)]
+    fn elastic_increment(&self, lt: f64, g2: f64) -> Self {
+        Self::new(
+            lt + g2 * self.xx,
+            lt + g2 * self.yy,
+            lt + g2 * self.zz,
+            g2 * self.xy,
+            g2 * self.yz,
+            g2 * self.zx,
         )
     }
     #[inline(always)]
@@ -449,6 +457,10 @@ impl Symmetric for PlaneTensor {
             self.zz + lt + tg * d.zz,
             self.xy + tg * d.xy,
         )
+    }
+    #[inline(always)]
+    fn elastic_increment(&self, lt: f64, g2: f64) -> Self {
+        Self::new(lt + g2 * self.xx, lt + g2 * self.yy, lt + g2 * self.zz, g2 * self.xy)
     }
     #[inline(always)]
     fn from_sym(t: &SymTensor) -> Self {

@@ -276,7 +276,7 @@ proptest! {
         let rotation = theta.map(|t: f64| (t.cos(), t.sin()));
         same_bits(&m, sigma, state, d, rotation)?;
         same_bits(m.elasticity(), sigma, (), d, rotation)?;
-        same_bits(&DefaultPlane(*m.elasticity()), sigma, (), d, rotation)?;
+        same_bits(&DefaultPlane::new(*m.elasticity()), sigma, (), d, rotation)?;
     }
 
     #[test]
@@ -342,15 +342,25 @@ proptest! {
     }
 }
 
-/// linear elasticity through the trait's default `update_plane` and `rotate_state_z`.
-struct DefaultPlane(LinearElastic);
+/// linear elasticity through the trait's default `update_plane` and `rotate_state_z`; with a
+/// non-zero `twist`, its update also adds that much out-of-plane shear `σ_yz` to any stress.
+struct DefaultPlane {
+    elastic: LinearElastic,
+    twist: f64,
+}
+
+impl DefaultPlane {
+    fn new(elastic: LinearElastic) -> Self {
+        Self { elastic, twist: 0.0 }
+    }
+}
 
 impl ConstitutiveModel for DefaultPlane {
     type State = ();
     const IS_PLASTIC: bool = false;
     fn initial_state(&self) {}
     fn elasticity(&self) -> &LinearElastic {
-        &self.0
+        &self.elastic
     }
     fn update(
         &self,
@@ -358,32 +368,8 @@ impl ConstitutiveModel for DefaultPlane {
         state: &mut (),
         d_eps: &SymTensor,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        self.0.update(sigma, state, d_eps)
-    }
-    fn rotate_state(&self, _state: &mut (), _r: &DMat3) {}
-    fn equivalent_plastic_strain(&self, _state: &()) -> f64 {
-        0.0
-    }
-}
-
-/// A model whose update creates an out-of-plane shear from any increment.
-struct Twisting(LinearElastic);
-
-impl ConstitutiveModel for Twisting {
-    type State = ();
-    const IS_PLASTIC: bool = false;
-    fn initial_state(&self) {}
-    fn elasticity(&self) -> &LinearElastic {
-        &self.0
-    }
-    fn update(
-        &self,
-        sigma: &mut SymTensor,
-        state: &mut (),
-        d_eps: &SymTensor,
-    ) -> Result<UpdateReport, ConstitutiveError> {
-        let report = self.0.update(sigma, state, d_eps)?;
-        sigma.yz += 1.0;
+        let report = self.elastic.update(sigma, state, d_eps)?;
+        sigma.yz += self.twist;
         Ok(report)
     }
     fn rotate_state(&self, _state: &mut (), _r: &DMat3) {}
@@ -416,7 +402,7 @@ fn plane_update_refuses_what_it_cannot_carry() {
             );
             let mut s = s0;
             let e_default =
-                DefaultPlane(elastic).update_plane(&mut s, &mut (), &d, rotation).unwrap_err();
+                DefaultPlane::new(elastic).update_plane(&mut s, &mut (), &d, rotation).unwrap_err();
             assert_eq!(
                 s.to_sym().to_array().map(f64::to_bits),
                 s0.to_sym().to_array().map(f64::to_bits)
@@ -430,7 +416,8 @@ fn plane_update_refuses_what_it_cannot_carry() {
     }
     let mut s = sigma0;
     let d = PlaneTensor::new(1e-5, 0.0, 0.0, 0.0);
-    let e = Twisting(elastic).update_plane(&mut s, &mut (), &d, None).unwrap_err();
+    let twisting = DefaultPlane { elastic, twist: 1.0 };
+    let e = twisting.update_plane(&mut s, &mut (), &d, None).unwrap_err();
     assert_eq!(e, ConstitutiveError::OutOfPlane { name: "stress.yz", value: 1.0 });
     assert_eq!(s, sigma0);
 }
