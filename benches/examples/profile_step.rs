@@ -16,8 +16,9 @@ fn main() {
             run(n, steps, warmup, material);
         }
         Some("sand") => {
-            let sand = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND)
-                .expect("the paper's sand is valid");
+            // (as `mpm run` stores it: only ε̄ᵖ, since it does not harden)
+            let sand = DruckerPrager::perfectly_plastic(DruckerPragerParams::ABE2005_DRY_SAND)
+                .expect("the paper's sand is valid and does not harden");
             run(n, steps, warmup, sand);
         }
         Some(other) => eprintln!("unknown material {other:?}: elastic or sand"),

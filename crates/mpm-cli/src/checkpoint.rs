@@ -30,8 +30,9 @@ use crate::run::History;
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
 /// carries the output time, the solver state the time step's reference densities; 3: the
 /// header with length and checksum, the history the energy check; 4: particle stresses carry
-/// the four plane-strain components).
-pub(crate) const FORMAT: u32 = 4;
+/// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
+/// only ε̄ᵖ per particle).
+pub(crate) const FORMAT: u32 = 5;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

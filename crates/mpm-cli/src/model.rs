@@ -1,10 +1,12 @@
 //! The one place where a scene's run-time choices become types: constitutive model
-//! (elastic | Drucker-Prager) × grid with shape functions (bilinear on the terrain grid,
-//! bilinear | uGIMP | quadratic B-spline on the regular grid). [`dispatch`] matches once per
-//! scene and calls a generic [`Job`]; everything below runs monomorphised, with no per-particle
-//! dynamic dispatch.
+//! (elastic | Drucker-Prager, with particles storing the mixed-hardening variables only when some
+//! material hardens) × grid with shape functions (bilinear on the terrain grid, bilinear | uGIMP |
+//! quadratic B-spline on the regular grid). [`dispatch`] matches once per scene and calls a
+//! generic [`Job`]; everything below runs monomorphised, with no per-particle dynamic dispatch.
 
-use mpm_constitutive::{ConstitutiveModel, DpState, DruckerPrager, LinearElastic, PlaneTensor};
+use mpm_constitutive::{
+    ConstitutiveModel, DpPerfectState, DpState, DruckerPrager, LinearElastic, PlaneTensor,
+};
 use mpm_grid::{Bilinear, Gimp, QuadraticBSpline, ShapeFunctions};
 use mpm_solver::{Checkpoint, NewParticle, Particles};
 use serde::{Deserialize, Serialize};
@@ -18,8 +20,10 @@ use crate::validate::{GridBuilt, MaterialsBuilt, Scene, Seed};
 pub(crate) enum SavedState {
     /// elastic scenes.
     Elastic(Checkpoint<()>),
-    /// Drucker-Prager scenes.
+    /// Drucker-Prager scenes with a hardening material.
     Plastic(Checkpoint<DpState>),
+    /// Drucker-Prager scenes whose materials do not harden (`H = 0`).
+    PerfectlyPlastic(Checkpoint<DpPerfectState>),
 }
 
 impl SavedState {
@@ -28,6 +32,7 @@ impl SavedState {
         match self {
             SavedState::Elastic(c) => (c.time, c.step, c.particles.len()),
             SavedState::Plastic(c) => (c.time, c.step, c.particles.len()),
+            SavedState::PerfectlyPlastic(c) => (c.time, c.step, c.particles.len()),
         }
     }
 }
@@ -47,7 +52,7 @@ impl SceneModel for LinearElastic {
     fn unwrap(s: SavedState) -> Option<Checkpoint<()>> {
         match s {
             SavedState::Elastic(c) => Some(c),
-            SavedState::Plastic(_) => None,
+            _ => None,
         }
     }
 }
@@ -59,7 +64,19 @@ impl SceneModel for DruckerPrager {
     fn unwrap(s: SavedState) -> Option<Checkpoint<DpState>> {
         match s {
             SavedState::Plastic(c) => Some(c),
-            SavedState::Elastic(_) => None,
+            _ => None,
+        }
+    }
+}
+
+impl SceneModel for DruckerPrager<DpPerfectState> {
+    fn wrap(c: Checkpoint<DpPerfectState>) -> SavedState {
+        SavedState::PerfectlyPlastic(c)
+    }
+    fn unwrap(s: SavedState) -> Option<Checkpoint<DpPerfectState>> {
+        match s {
+            SavedState::PerfectlyPlastic(c) => Some(c),
+            _ => None,
         }
     }
 }
@@ -112,7 +129,15 @@ pub(crate) fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, Scene
     }
     match &r.materials {
         MaterialsBuilt::Elastic(m) => with_shape(scene, job, m.clone()),
-        MaterialsBuilt::Plastic(m) => with_shape(scene, job, m.clone()),
+        // A scene pays for the hardening variables (64 B per particle) only if it hardens.
+        MaterialsBuilt::Plastic(m) => {
+            match m.iter().map(DruckerPrager::without_hardening).collect() {
+                Some(perfect) => {
+                    with_shape::<J, DruckerPrager<DpPerfectState>>(scene, job, perfect)
+                }
+                None => with_shape(scene, job, m.clone()),
+            }
+        }
     }
 }
 
@@ -134,4 +159,40 @@ pub(crate) fn particles<M: SceneModel>(seeds: &[Seed], materials: &[M]) -> Parti
         });
     }
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::embedded_scene;
+    use crate::validate::load_scene_str;
+
+    /// the bytes of constitutive state a scene's particles carry.
+    struct StateBytes;
+
+    impl Job for StateBytes {
+        type Output = usize;
+        fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+            self,
+            _scene: &Scene,
+            _shape: S,
+            _materials: Vec<M>,
+        ) -> usize {
+            std::mem::size_of::<M::State>()
+        }
+    }
+
+    /// The paper's sand does not harden, so its particles store only ε̄ᵖ; a hardening material
+    /// in the same scene brings k and β back.
+    #[test]
+    fn a_scene_stores_hardening_variables_only_when_a_material_hardens() {
+        let flume = load_scene_str(embedded_scene("flume").unwrap(), "flume").unwrap();
+        assert_eq!(dispatch(&flume, StateBytes).unwrap(), 8);
+        let hardening = flume
+            .modified(|f| f.materials.get_mut("sand").unwrap().hardening_modulus = Some(1.0e4))
+            .unwrap();
+        assert_eq!(dispatch(&hardening, StateBytes).unwrap(), 64);
+        let elastic = load_scene_str(embedded_scene("free_fall").unwrap(), "free_fall").unwrap();
+        assert_eq!(dispatch(&elastic, StateBytes).unwrap(), 0);
+    }
 }

@@ -68,7 +68,10 @@
 //! `φ = 0` there is no apex; a cone softened to `k < 0` is then empty and the update returns
 //! [`ConstitutiveError::EmptyElasticDomain`].
 
+use std::marker::PhantomData;
+
 use glam::DMat3;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::elastic::LinearElastic;
@@ -149,7 +152,7 @@ impl DruckerPragerParams {
     };
 }
 
-/// Internal variables of a [`DruckerPrager`] material point.
+/// Internal variables of a [`DruckerPrager`] material point with mixed hardening.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct DpState {
     /// deviatoric back stress β
@@ -160,10 +163,80 @@ pub struct DpState {
     pub eps_p_bar: f64,
 }
 
+/// Internal variables of a perfectly plastic [`DruckerPrager`] point (`H = 0`, as the paper's
+/// dry sand): its cone size stays `k0` and its back stress zero, so only `ε̄ᵖ` is stored, 8 bytes
+/// instead of [`DpState`]'s 64.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DpPerfectState {
+    /// equivalent plastic strain ε̄ᵖ
+    pub eps_p_bar: f64,
+}
+
+/// What a [`DruckerPrager`] point stores: [`DpState`] (mixed hardening, the default) or
+/// [`DpPerfectState`] (`H = 0`). The return mapping is written once against this trait; a point
+/// that does not harden reads `k = k0` and `β = 0` and stores neither, with the same results.
+pub trait DpVariables:
+    Copy + Default + std::fmt::Debug + Send + Sync + PartialEq + Serialize + DeserializeOwned + 'static
+{
+    /// whether `k` and `β` are stored (false: they stay `k0` and 0).
+    const HARDENS: bool;
+    /// the variables with back stress `β`, cone size `k` and `ε̄ᵖ` (`β` and `k` are dropped when
+    /// [`HARDENS`](Self::HARDENS) is false: they are then 0 and `k0`).
+    fn new(back_stress: SymTensor, k: f64, eps_p_bar: f64) -> Self;
+    /// deviatoric back stress `β`.
+    fn back_stress(&self) -> SymTensor;
+    /// cone size `k` (Pa) of a material whose initial cone size is `k0`.
+    fn k(&self, k0: f64) -> f64;
+    /// equivalent plastic strain `ε̄ᵖ`.
+    fn eps_p_bar(&self) -> f64;
+}
+
+impl DpVariables for DpState {
+    const HARDENS: bool = true;
+    #[inline(always)]
+    fn new(back_stress: SymTensor, k: f64, eps_p_bar: f64) -> Self {
+        Self { back_stress, k, eps_p_bar }
+    }
+    #[inline(always)]
+    fn back_stress(&self) -> SymTensor {
+        self.back_stress
+    }
+    #[inline(always)]
+    fn k(&self, _k0: f64) -> f64 {
+        self.k
+    }
+    #[inline(always)]
+    fn eps_p_bar(&self) -> f64 {
+        self.eps_p_bar
+    }
+}
+
+impl DpVariables for DpPerfectState {
+    const HARDENS: bool = false;
+    #[inline(always)]
+    fn new(_back_stress: SymTensor, _k: f64, eps_p_bar: f64) -> Self {
+        Self { eps_p_bar }
+    }
+    #[inline(always)]
+    fn back_stress(&self) -> SymTensor {
+        SymTensor::ZERO
+    }
+    #[inline(always)]
+    fn k(&self, k0: f64) -> f64 {
+        k0
+    }
+    #[inline(always)]
+    fn eps_p_bar(&self) -> f64 {
+        self.eps_p_bar
+    }
+}
+
 /// Drucker-Prager with non-associated flow and Prager mixed hardening (eqs 23–25), see the module
-/// docs for the return mapping.
+/// docs for the return mapping. `V` is what a point stores: [`DpState`] ([`DruckerPrager::new`])
+/// or, for a material that does not harden, [`DpPerfectState`]
+/// ([`DruckerPrager::perfectly_plastic`], [`DruckerPrager::without_hardening`]).
 #[derive(Clone, Debug)]
-pub struct DruckerPrager {
+pub struct DruckerPrager<V: DpVariables = DpState> {
     params: DruckerPragerParams,
     elastic: LinearElastic,
     alpha: f64,
@@ -187,6 +260,7 @@ pub struct DruckerPrager {
     inv_alpha: f64,
     /// `1 / (9K)`.
     inv_9k: f64,
+    variables: PhantomData<fn() -> V>,
 }
 
 const SQRT_2: f64 = std::f64::consts::SQRT_2;
@@ -218,6 +292,49 @@ impl DruckerPrager {
     /// Admissible: `E > 0`, `−1 < ν < 0.5`, `c ≥ 0`, `0 ≤ φ < 90°`, `0 ≤ ψ ≤ φ`, `M ∈ [0, 1]`,
     /// finite `H` with `9Kααg + G + H > 0` and `G + (1 − M)H > 0`.
     pub fn new(p: DruckerPragerParams) -> Result<Self, ConstitutiveError> {
+        Self::build(p)
+    }
+
+    /// the same material storing only `ε̄ᵖ` per point ([`DpPerfectState`]) when it does not
+    /// harden (`H = 0`); `None` otherwise. Its updates give the same stresses, `ε̄ᵖ` and reports.
+    pub fn without_hardening(&self) -> Option<DruckerPrager<DpPerfectState>> {
+        (self.params.hardening_modulus == 0.0).then_some(DruckerPrager {
+            params: self.params,
+            elastic: self.elastic,
+            alpha: self.alpha,
+            alpha_g: self.alpha_g,
+            k0: self.k0,
+            two_g: self.two_g,
+            lame: self.lame,
+            nine_k_alpha_g: self.nine_k_alpha_g,
+            iso_h: self.iso_h,
+            kin_h: self.kin_h,
+            inv_d: self.inv_d,
+            inv_b: self.inv_b,
+            inv_alpha: self.inv_alpha,
+            inv_9k: self.inv_9k,
+            variables: PhantomData,
+        })
+    }
+}
+
+impl DruckerPrager<DpPerfectState> {
+    /// [`DruckerPrager::new`] for a material that does not harden: `H = 0` is required (it is
+    /// refused otherwise), and each point stores only `ε̄ᵖ`.
+    pub fn perfectly_plastic(p: DruckerPragerParams) -> Result<Self, ConstitutiveError> {
+        if p.hardening_modulus != 0.0 {
+            return Err(ConstitutiveError::InvalidParameter {
+                name: "hardening_modulus",
+                value: p.hardening_modulus,
+                range: "0 for a perfectly plastic material (DruckerPrager::new hardens)",
+            });
+        }
+        Self::build(p)
+    }
+}
+
+impl<V: DpVariables> DruckerPrager<V> {
+    fn build(p: DruckerPragerParams) -> Result<Self, ConstitutiveError> {
         let elastic = LinearElastic::from_young_poisson(p.young, p.poisson)?;
         let invalid =
             |name, value, range| ConstitutiveError::InvalidParameter { name, value, range };
@@ -282,6 +399,7 @@ impl DruckerPrager {
             inv_b: 1.0 / b,
             inv_alpha: if alpha > 0.0 { 1.0 / alpha } else { 0.0 },
             inv_9k: 1.0 / (9.0 * bulk),
+            variables: PhantomData,
         })
     }
 
@@ -311,14 +429,14 @@ impl DruckerPrager {
     }
 
     /// eq 23: `f = α I1 + √J2(σ − β) − k` (Pa); `f ≤ 0` is admissible.
-    pub fn yield_function(&self, sigma: &SymTensor, state: &DpState) -> f64 {
-        self.alpha * sigma.trace() + (*sigma - state.back_stress).j2().sqrt() - state.k
+    pub fn yield_function(&self, sigma: &SymTensor, state: &V) -> f64 {
+        self.alpha * sigma.trace() + (*sigma - state.back_stress()).j2().sqrt() - state.k(self.k0)
     }
 
     /// the plastic potential's gradient `∂g/∂σ = αg I + n̂/√2` at `(sigma, state)`; at the apex
     /// (`ξ = 0`) the deviatoric part is taken as zero.
-    pub fn flow_direction(&self, sigma: &SymTensor, state: &DpState) -> SymTensor {
-        let xi = (*sigma - state.back_stress).deviator();
+    pub fn flow_direction(&self, sigma: &SymTensor, state: &V) -> SymTensor {
+        let xi = (*sigma - state.back_stress()).deviator();
         let norm = xi.norm();
         let dev = if norm > 0.0 { xi * (FRAC_1_SQRT_2 / norm) } else { SymTensor::ZERO };
         SymTensor::IDENTITY * self.alpha_g + dev
@@ -337,17 +455,18 @@ impl DruckerPrager {
     pub fn consistent_tangent(
         &self,
         sigma: &SymTensor,
-        state: &DpState,
+        state: &V,
         d_eps: &SymTensor,
     ) -> Result<Tangent, ConstitutiveError> {
-        self.check_inputs(sigma, &state.back_stress, state, d_eps)?;
-        let trial = self.trial(sigma, &state.back_stress, d_eps);
+        let back_stress = state.back_stress();
+        self.check_inputs(sigma, &back_stress, state, d_eps)?;
+        let trial = self.trial(sigma, &back_stress, d_eps);
         let g = self.elastic.shear_modulus();
         let bulk = self.elastic.bulk_modulus();
         let q_tr = trial.j2.sqrt();
         let n_hat = if q_tr > 0.0 { trial.xi * (FRAC_1_SQRT_2 / q_tr) } else { SymTensor::ZERO };
         let p_dev = deviatoric_projector();
-        match self.return_map(&trial, state)? {
+        match self.return_map(&trial, state.k(self.k0))? {
             Return::Elastic => Ok(self.elastic.stiffness_matrix()),
             Return::Cone { dl, .. } => {
                 let c_dg = SymTensor::IDENTITY * (3.0 * bulk * self.alpha_g) + n_hat * (SQRT_2 * g);
@@ -376,18 +495,28 @@ impl DruckerPrager {
         &self,
         sigma: &T,
         back_stress: &T,
-        state: &DpState,
+        state: &V,
         d_eps: &T,
     ) -> Result<(), ConstitutiveError> {
-        // One test for the common all-finite case (see `SymTensor::finite_probe`).
-        let probe = sigma.finite_probe()
-            + d_eps.finite_probe()
-            + back_stress.finite_probe()
-            + ((state.k - state.k) + (state.eps_p_bar - state.eps_p_bar));
+        // One test for the common all-finite case (see `SymTensor::finite_probe`); a point that
+        // does not harden has no back stress or k of its own to test.
+        let (k, eps) = (state.k(self.k0), state.eps_p_bar());
+        let variables = if V::HARDENS {
+            back_stress.finite_probe() + ((k - k) + (eps - eps))
+        } else {
+            eps - eps
+        };
+        let probe = sigma.finite_probe() + d_eps.finite_probe() + variables;
         if probe == 0.0 {
             Ok(())
         } else {
-            Self::non_finite_input(&sigma.to_sym(), &back_stress.to_sym(), state, &d_eps.to_sym())
+            Self::non_finite_input(
+                &sigma.to_sym(),
+                &back_stress.to_sym(),
+                state,
+                self.k0,
+                &d_eps.to_sym(),
+            )
         }
     }
 
@@ -409,14 +538,16 @@ impl DruckerPrager {
     fn non_finite_input(
         sigma: &SymTensor,
         back_stress: &SymTensor,
-        state: &DpState,
+        state: &V,
+        k0: f64,
         d_eps: &SymTensor,
     ) -> Result<(), ConstitutiveError> {
         check_finite(sigma, d_eps)?;
-        let (name, value) = if !state.k.is_finite() {
-            ("k", state.k)
-        } else if !state.eps_p_bar.is_finite() {
-            ("eps_p_bar", state.eps_p_bar)
+        let (k, eps_p_bar) = (state.k(k0), state.eps_p_bar());
+        let (name, value) = if !k.is_finite() {
+            ("k", k)
+        } else if !eps_p_bar.is_finite() {
+            ("eps_p_bar", eps_p_bar)
         } else {
             let (c, v) = back_stress.first_non_finite().unwrap_or(("xx", f64::NAN));
             let name = match c {
@@ -445,10 +576,10 @@ impl DruckerPrager {
     }
 
     #[inline]
-    fn return_map<T>(&self, t: &Trial<T>, state: &DpState) -> Result<Return, ConstitutiveError> {
+    fn return_map<T>(&self, t: &Trial<T>, k_n: f64) -> Result<Return, ConstitutiveError> {
         // f = qᵗʳ − r with r = k − α I1ᵗʳ the strength at the trial pressure; f ≤ 0 is
         // r ≥ 0 and J2 ≤ r², which spares the square root on the (most frequent) elastic path.
-        let r = state.k - self.alpha * t.i1;
+        let r = k_n - self.alpha * t.i1;
         if r >= 0.0 && t.j2 <= r * r {
             return Ok(Return::Elastic);
         }
@@ -460,7 +591,7 @@ impl DruckerPrager {
         }
         // cone: Δλ = fᵗʳ / (9Kααg + G + H); q from the consistency condition.
         let dl = f * self.inv_d;
-        let k = state.k + self.iso_h * dl;
+        let k = k_n + self.iso_h * dl;
         let i1 = t.i1 - self.nine_k_alpha_g * dl;
         let q = k - self.alpha * i1;
         if q_tr > 0.0 && q >= 0.0 {
@@ -468,7 +599,7 @@ impl DruckerPrager {
         }
         // apex: Δλ = qᵗʳ / (G + (1 − M)H), I1 = k_{n+1}/α.
         let dl = q_tr * self.inv_b;
-        let k = state.k + self.iso_h * dl;
+        let k = k_n + self.iso_h * dl;
         if self.alpha > 0.0 {
             Ok(Return::Apex { dl, i1: k * self.inv_alpha, k })
         } else {
@@ -477,12 +608,12 @@ impl DruckerPrager {
     }
 }
 
-impl ConstitutiveModel for DruckerPrager {
-    type State = DpState;
+impl<V: DpVariables> ConstitutiveModel for DruckerPrager<V> {
+    type State = V;
     const IS_PLASTIC: bool = true;
 
-    fn initial_state(&self) -> DpState {
-        DpState { back_stress: SymTensor::ZERO, k: self.k0, eps_p_bar: 0.0 }
+    fn initial_state(&self) -> V {
+        V::new(SymTensor::ZERO, self.k0, 0.0)
     }
 
     fn elasticity(&self) -> &LinearElastic {
@@ -493,10 +624,10 @@ impl ConstitutiveModel for DruckerPrager {
     fn update(
         &self,
         sigma: &mut SymTensor,
-        state: &mut DpState,
+        state: &mut V,
         d_eps: &SymTensor,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        let back_stress = state.back_stress;
+        let back_stress = state.back_stress();
         self.update_in(sigma, *sigma, back_stress, state, d_eps)
     }
 
@@ -508,19 +639,21 @@ impl ConstitutiveModel for DruckerPrager {
     fn update_plane(
         &self,
         sigma: &mut PlaneTensor,
-        state: &mut DpState,
+        state: &mut V,
         d_eps: &PlaneTensor,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        let (yz, zx) = (state.back_stress.yz, state.back_stress.zx);
-        if yz != 0.0 || zx != 0.0 {
+        let full = state.back_stress();
+        if V::HARDENS && (full.yz != 0.0 || full.zx != 0.0) {
             // (NaN included) a back stress plane strain cannot carry: refused, not dropped.
-            return Err(Self::out_of_plane(yz, zx));
+            return Err(Self::out_of_plane(full.yz, full.zx));
         }
-        let back_stress = PlaneTensor::from_sym(&state.back_stress);
+        let back_stress = PlaneTensor::from_sym(&full);
         match rotation {
             Some((c, s)) => {
-                let (start, back) = (sigma.rotated_z(c, s), back_stress.rotated_z(c, s));
+                let start = sigma.rotated_z(c, s);
+                // (a zero back stress turns into itself)
+                let back = if V::HARDENS { back_stress.rotated_z(c, s) } else { back_stress };
                 self.update_in(sigma, start, back, state, d_eps)
             }
             None => self.update_in(sigma, *sigma, back_stress, state, d_eps),
@@ -528,21 +661,27 @@ impl ConstitutiveModel for DruckerPrager {
     }
 
     #[inline(always)]
-    fn rotate_state_z(&self, state: &mut DpState, c: f64, s: f64) {
-        state.back_stress = state.back_stress.rotated_z(c, s);
+    fn rotate_state_z(&self, state: &mut V, c: f64, s: f64) {
+        if V::HARDENS {
+            let back_stress = state.back_stress().rotated_z(c, s);
+            *state = V::new(back_stress, state.k(self.k0), state.eps_p_bar());
+        }
     }
 
     #[inline(always)]
-    fn rotate_state(&self, state: &mut DpState, r: &DMat3) {
-        state.back_stress = state.back_stress.rotated(r);
+    fn rotate_state(&self, state: &mut V, r: &DMat3) {
+        if V::HARDENS {
+            let back_stress = state.back_stress().rotated(r);
+            *state = V::new(back_stress, state.k(self.k0), state.eps_p_bar());
+        }
     }
 
-    fn equivalent_plastic_strain(&self, state: &DpState) -> f64 {
-        state.eps_p_bar
+    fn equivalent_plastic_strain(&self, state: &V) -> f64 {
+        state.eps_p_bar()
     }
 }
 
-impl DruckerPrager {
+impl<V: DpVariables> DruckerPrager<V> {
     /// [`ConstitutiveModel::update`] on full or plane-strain tensors (see [`Symmetric`]) from
     /// the stress `start` and back stress `back_stress` (the state's, possibly turned by an
     /// objective rate): writes `sigma` and `state` (its back stress in the components of `T`)
@@ -553,14 +692,15 @@ impl DruckerPrager {
         sigma: &mut T,
         start: T,
         back_stress: T,
-        state: &mut DpState,
+        state: &mut V,
         d_eps: &T,
     ) -> Result<UpdateReport, ConstitutiveError> {
         self.check_inputs(&start, &back_stress, state, d_eps)?;
         let t = self.trial(&start, &back_stress, d_eps);
-        let (new_sigma, new_state, report) = match self.return_map(&t, state)? {
+        let (k_n, eps_n) = (state.k(self.k0), state.eps_p_bar());
+        let (new_sigma, new_state, report) = match self.return_map(&t, k_n)? {
             Return::Elastic => {
-                let st = DpState { back_stress: back_stress.to_sym(), ..*state };
+                let st = V::new(back_stress.to_sym(), k_n, eps_n);
                 (t.sigma, st, UpdateReport::ELASTIC)
             }
             Return::Cone { dl, i1, q, k, q_tr } => {
@@ -570,7 +710,7 @@ impl DruckerPrager {
                 let s = T::IDENTITY * (i1 / 3.0) + beta + t.xi * (q * inv_q);
                 // σ : Δεᵖ = Δλ (αg I1 + s : n̂/√2), s : n̂/√2 = q + β : ξᵗʳ/(2qᵗʳ).
                 let work = dl * (self.alpha_g * i1 + q + 0.5 * inv_q * beta.ddot(&t.xi));
-                let st = DpState { back_stress: beta.to_sym(), k, eps_p_bar: state.eps_p_bar + dl };
+                let st = V::new(beta.to_sym(), k, eps_n + dl);
                 let rep =
                     UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
                 (s, st, rep)
@@ -581,7 +721,7 @@ impl DruckerPrager {
                 let s = T::IDENTITY * (i1 / 3.0) + beta;
                 // σ : C⁻¹ : (σᵗʳ − σ) with σᵗʳ − σ = (I1ᵗʳ − I1)/3 I + (G/B) ξᵗʳ.
                 let work = i1 * (t.i1 - i1) * self.inv_9k + 0.5 * self.inv_b * beta.ddot(&t.xi);
-                let st = DpState { back_stress: beta.to_sym(), k, eps_p_bar: state.eps_p_bar + dl };
+                let st = V::new(beta.to_sym(), k, eps_n + dl);
                 let rep =
                     UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };
                 (s, st, rep)
@@ -599,14 +739,14 @@ impl DruckerPrager {
     }
 }
 
-impl TangentModel for DruckerPrager {
+impl<V: DpVariables> TangentModel for DruckerPrager<V> {
     fn consistent_tangent(
         &self,
         sigma: &SymTensor,
-        state: &DpState,
+        state: &V,
         d_eps: &SymTensor,
     ) -> Result<Tangent, ConstitutiveError> {
         // the inherent method (inherent methods take precedence over trait methods).
-        DruckerPrager::consistent_tangent(self, sigma, state, d_eps)
+        DruckerPrager::<V>::consistent_tangent(self, sigma, state, d_eps)
     }
 }

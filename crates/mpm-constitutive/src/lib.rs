@@ -64,7 +64,9 @@ pub mod error;
 pub mod model;
 pub mod tensor;
 
-pub use drucker_prager::{ConeMatch, DpState, DruckerPrager, DruckerPragerParams};
+pub use drucker_prager::{
+    ConeMatch, DpPerfectState, DpState, DpVariables, DruckerPrager, DruckerPragerParams,
+};
 pub use elastic::LinearElastic;
 pub use error::ConstitutiveError;
 pub use model::{ConstitutiveModel, Surface, TangentModel, UpdateReport};

@@ -8,8 +8,8 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
-    LinearElastic, PlaneTensor, Surface, SymTensor, UpdateReport,
+    ConeMatch, ConstitutiveError, ConstitutiveModel, DpPerfectState, DpState, DruckerPrager,
+    DruckerPragerParams, LinearElastic, PlaneTensor, Surface, SymTensor, UpdateReport,
 };
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
@@ -279,6 +279,39 @@ proptest! {
         same_bits(&DefaultPlane::new(*m.elasticity()), sigma, (), d, rotation)?;
     }
 
+    /// A material that does not harden gives the same bits whether its points store only ε̄ᵖ
+    /// (`DpPerfectState`, what `mpm` picks for H = 0) or the mixed-hardening variables, whose
+    /// k and β then stay k0 and 0: full and plane updates, turned or not, every branch.
+    #[test]
+    fn perfect_plasticity_gives_the_bits_of_the_hardening_variables_at_h_zero(
+        (m, sigma, state, d) in case(),
+        theta in prop_oneof![Just(None), (-0.05..0.05f64).prop_map(Some)],
+    ) {
+        let p = DruckerPragerParams { hardening_modulus: 0.0, ..*m.params() };
+        let hardening = DruckerPrager::new(p).expect("H = 0 is admissible");
+        let perfect = hardening.without_hardening().expect("H = 0");
+        let eps_p_bar = state.eps_p_bar;
+        let full = DpState { back_stress: SymTensor::ZERO, k: hardening.k0(), eps_p_bar };
+        let lean = DpPerfectState { eps_p_bar };
+        let bits = |t: SymTensor| t.to_array().map(f64::to_bits);
+        let (mut s1, mut st1, mut s2, mut st2) = (sigma, full, sigma, lean);
+        let (r1, r2) = (hardening.update(&mut s1, &mut st1, &d), perfect.update(&mut s2, &mut st2, &d));
+        prop_assert_eq!(r1.map_err(|e| e.to_string()), r2.map_err(|e| e.to_string()));
+        prop_assert_eq!(bits(s1), bits(s2));
+        prop_assert_eq!(st1.eps_p_bar.to_bits(), st2.eps_p_bar.to_bits());
+        prop_assert_eq!((st1.k, st1.back_stress), (hardening.k0(), SymTensor::ZERO));
+
+        let rotation = theta.map(|t: f64| (t.cos(), t.sin()));
+        let (sigma, d) = (PlaneTensor::from_sym(&sigma), PlaneTensor::new(d.xx, d.yy, 0.0, d.xy));
+        let (mut s1, mut st1, mut s2, mut st2) = (sigma, full, sigma, lean);
+        let r1 = hardening.update_plane(&mut s1, &mut st1, &d, rotation);
+        let r2 = perfect.update_plane(&mut s2, &mut st2, &d, rotation);
+        prop_assert_eq!(r1.map_err(|e| e.to_string()), r2.map_err(|e| e.to_string()));
+        prop_assert_eq!(bits(s1.to_sym()), bits(s2.to_sym()));
+        prop_assert_eq!(st1.eps_p_bar.to_bits(), st2.eps_p_bar.to_bits());
+        same_bits(&perfect, sigma, lean, d, rotation)?;
+    }
+
     #[test]
     fn outputs_are_finite((m, sigma, state, d) in case()) {
         let (mut s, mut st) = (sigma, state);
@@ -456,6 +489,25 @@ fn same_bits<M: ConstitutiveModel>(
         (a, b) => prop_assert!(false, "full {:?} against plane {:?}", a, b),
     }
     Ok(())
+}
+
+/// Only a material that does not harden can drop its hardening variables, and what it keeps is
+/// one number.
+#[test]
+fn perfect_plasticity_needs_h_zero() {
+    let sand = DruckerPragerParams::ABE2005_DRY_SAND;
+    assert!(DruckerPrager::new(sand).unwrap().without_hardening().is_some());
+    assert!(DruckerPrager::perfectly_plastic(sand).is_ok());
+    let hardening = DruckerPragerParams { hardening_modulus: 1.0e4, ..sand };
+    assert!(DruckerPrager::new(hardening).unwrap().without_hardening().is_none());
+    match DruckerPrager::perfectly_plastic(hardening) {
+        Err(ConstitutiveError::InvalidParameter { name, value, .. }) => {
+            assert_eq!((name, value), ("hardening_modulus", 1.0e4));
+        }
+        other => panic!("expected the hardening modulus refused, got {other:?}"),
+    }
+    assert_eq!(std::mem::size_of::<DpPerfectState>(), 8);
+    assert_eq!(std::mem::size_of::<DpState>(), 64);
 }
 
 /// the random cases must exercise every branch, or the properties above prove little.

@@ -112,22 +112,33 @@ fn sliding_block_probe_follows_eq_21() {
 
 #[test]
 fn resume_continues_bit_identically() {
-    // Drucker-Prager state, objective stress and friction all go through the checkpoint.
-    let scene = short("flume", 0.06);
-    let straight = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
-
-    let dir = temp_dir("resume");
-    let stopped = run_scene(&scene, &RunOptions { stop_after: Some(0.025), ..opts(&dir) }).unwrap();
-    assert_eq!(stopped.status, RunStatus::Interrupted);
-    assert!(stopped.simulated_time < 0.06 && stopped.steps < straight.steps);
-    assert!(dir.join(CHECKPOINT_FILE).exists());
-    let resumed = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
-    assert_eq!(resumed.status, RunStatus::Completed);
-    assert_eq!(resumed.steps, straight.steps);
-    assert_eq!(resumed.simulated_time.to_bits(), straight.simulated_time.to_bits());
-    assert_eq!(resumed.state_hash, straight.state_hash);
-    assert_eq!(resumed.energy, straight.energy);
-    std::fs::remove_dir_all(&dir).unwrap();
+    // Drucker-Prager state, objective stress and friction all go through the checkpoint: the
+    // paper's sand (H = 0, particles store only ε̄ᵖ) and a hardening one (k and β stored too).
+    let perfect = short("flume", 0.06);
+    let hardening = perfect
+        .modified(|f| {
+            let sand = f.materials.get_mut("sand").unwrap();
+            sand.hardening_modulus = Some(2.0e4);
+            sand.mixing = Some(0.5);
+        })
+        .unwrap();
+    for (name, scene) in [("perfect", perfect), ("hardening", hardening)] {
+        let straight =
+            run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+        let dir = temp_dir(&format!("resume_{name}"));
+        let stopped =
+            run_scene(&scene, &RunOptions { stop_after: Some(0.025), ..opts(&dir) }).unwrap();
+        assert_eq!(stopped.status, RunStatus::Interrupted);
+        assert!(stopped.simulated_time < 0.06 && stopped.steps < straight.steps);
+        assert!(dir.join(CHECKPOINT_FILE).exists());
+        let resumed = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+        assert_eq!(resumed.status, RunStatus::Completed, "{name}");
+        assert_eq!(resumed.steps, straight.steps, "{name}");
+        assert_eq!(resumed.simulated_time.to_bits(), straight.simulated_time.to_bits());
+        assert_eq!(resumed.state_hash, straight.state_hash, "{name}");
+        assert_eq!(resumed.energy, straight.energy, "{name}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
 
 /// every file of an output directory that a run writes deterministically (not the summary, the
@@ -236,7 +247,7 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
     let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
     assert!(matches!(err, RunError::Checkpoint { .. }), "{err}");
-    assert!(err.to_string().contains("format 1 but this mpm reads format 4"), "{err}");
+    assert!(err.to_string().contains("format 1 but this mpm reads format 5"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
