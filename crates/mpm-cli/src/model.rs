@@ -130,14 +130,10 @@ pub(crate) fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, Scene
     match &r.materials {
         MaterialsBuilt::Elastic(m) => with_shape(scene, job, m.clone()),
         // A scene pays for the hardening variables (64 B per particle) only if it hardens.
-        MaterialsBuilt::Plastic(m) => {
-            match m.iter().map(DruckerPrager::without_hardening).collect() {
-                Some(perfect) => {
-                    with_shape::<J, DruckerPrager<DpPerfectState>>(scene, job, perfect)
-                }
-                None => with_shape(scene, job, m.clone()),
-            }
-        }
+        MaterialsBuilt::Plastic(m) => match r.materials.without_hardening() {
+            Some(perfect) => with_shape(scene, job, perfect),
+            None => with_shape(scene, job, m.clone()),
+        },
     }
 }
 

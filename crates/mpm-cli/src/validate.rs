@@ -12,8 +12,8 @@
 use std::collections::BTreeMap;
 
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveError, ConstitutiveModel, DruckerPrager, DruckerPragerParams,
-    LinearElastic,
+    ConeMatch, ConstitutiveError, ConstitutiveModel, DpPerfectState, DpState, DruckerPrager,
+    DruckerPragerParams, LinearElastic,
 };
 use mpm_contact::{Boundary, ContactError, Friction};
 use mpm_grid::{GridError, KinkPolicy, LocateError, RegularGrid, TerrainGrid, TerrainGridSpec};
@@ -62,6 +62,26 @@ pub(crate) enum GridBuilt {
 pub(crate) enum MaterialsBuilt {
     Elastic(Vec<LinearElastic>),
     Plastic(Vec<DruckerPrager>),
+}
+
+impl MaterialsBuilt {
+    /// the Drucker-Prager materials storing only ε̄ᵖ per particle, when none of them hardens
+    /// (H = 0): a scene pays for the hardening variables only if it hardens.
+    pub(crate) fn without_hardening(&self) -> Option<Vec<DruckerPrager<DpPerfectState>>> {
+        match self {
+            MaterialsBuilt::Elastic(_) => None,
+            MaterialsBuilt::Plastic(m) => m.iter().map(DruckerPrager::without_hardening).collect(),
+        }
+    }
+
+    /// bytes of constitutive state per particle a run of these materials stores.
+    pub(crate) fn state_bytes(&self) -> usize {
+        match self {
+            MaterialsBuilt::Elastic(_) => 0,
+            _ if self.without_hardening().is_some() => std::mem::size_of::<DpPerfectState>(),
+            MaterialsBuilt::Plastic(_) => std::mem::size_of::<DpState>(),
+        }
+    }
 }
 
 /// One material point before the constitutive state is attached.
@@ -783,7 +803,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         MaterialsBuilt::Plastic(v) => v.iter().map(|m| m.elasticity().p_wave_modulus()).collect(),
     };
 
-    fits_in_memory(ctx, f, &grid, cell_x, shape_function, material_kind)?;
+    fits_in_memory(ctx, f, &grid, cell_x, shape_function, materials.state_bytes())?;
     let mut seeds: Vec<Seed> = Vec::new();
     // each earlier body's shape, bounding box and range of `seeds`.
     let mut shapes: Vec<(Shape, [Vector; 2], std::ops::Range<usize>)> = Vec::new();
@@ -1431,7 +1451,7 @@ fn fits_in_memory(
     grid: &GridBuilt,
     cell_x: f64,
     shape_function: ShapeFunctionKind,
-    material: MaterialKind,
+    state: usize,
 ) -> Result<(), SceneError> {
     let mut particles = 0.0;
     for (b, body) in f.bodies.iter().enumerate() {
@@ -1452,10 +1472,6 @@ fn fits_in_memory(
             let [nx, ny] = g.cells();
             (if kind == ShapeFunctionKind::Bilinear { 4 } else { 9 }, (nx + 3) * (ny + 3))
         }
-    };
-    let state = match material {
-        MaterialKind::Elastic => 0,
-        MaterialKind::DruckerPrager => std::mem::size_of::<mpm_constitutive::DpState>(),
     };
     let apic = f.solver.transfer == Some(Transfer::Apic);
     let fields = f.output.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec());

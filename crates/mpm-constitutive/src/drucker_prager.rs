@@ -362,6 +362,14 @@ impl<V: DpVariables> DruckerPrager<V> {
             ));
         }
         let (alpha, k0) = p.cone_match.coefficients(p.friction_angle_deg, p.cohesion);
+        if !k0.is_finite() {
+            // (a cohesion near f64::MAX overflows the cone size)
+            return Err(invalid(
+                "cohesion",
+                p.cohesion,
+                "0 <= cohesion with a finite cone size k0 (Pa)",
+            ));
+        }
         let (alpha_g, _) = p.cone_match.coefficients(p.dilatancy_angle_deg, 0.0);
         let (bulk, shear) = (elastic.bulk_modulus(), elastic.shear_modulus());
         let h = p.hardening_modulus;

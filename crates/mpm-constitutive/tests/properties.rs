@@ -508,6 +508,52 @@ fn perfect_plasticity_needs_h_zero() {
     }
     assert_eq!(std::mem::size_of::<DpPerfectState>(), 8);
     assert_eq!(std::mem::size_of::<DpState>(), 64);
+    // A cone size that overflows is refused, not stored (a perfect state never tests k).
+    let huge = DruckerPragerParams { cohesion: 1.0e308, ..sand };
+    assert!(matches!(
+        DruckerPrager::new(huge),
+        Err(ConstitutiveError::InvalidParameter { name: "cohesion", .. })
+    ));
+}
+
+/// the H = 0 cases of `perfect_plasticity_gives_the_bits_of_the_hardening_variables_at_h_zero`
+/// reach every branch, and on non-finite input both states refuse with the same error.
+#[test]
+fn perfect_state_cases_cover_every_branch_and_refuse_alike() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::TestRunner;
+    let mut runner = TestRunner::new(config());
+    let mut counts = [0usize; 3];
+    for _ in 0..2000 {
+        let (m, sigma, state, d) = case().new_tree(&mut runner).unwrap().current();
+        let p = DruckerPragerParams { hardening_modulus: 0.0, ..*m.params() };
+        let perfect = DruckerPrager::perfectly_plastic(p).unwrap();
+        let (mut s, mut st) = (sigma, DpPerfectState { eps_p_bar: state.eps_p_bar });
+        if let Ok(rep) = perfect.update(&mut s, &mut st, &d) {
+            counts[rep.surface as usize] += 1;
+        }
+    }
+    assert!(counts.iter().all(|&c| c >= 100), "elastic/cone/apex counts {counts:?}");
+
+    let hardening = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND).unwrap();
+    let perfect = hardening.without_hardening().unwrap();
+    let sigma = SymTensor::IDENTITY * -1.0e3;
+    let d = SymTensor::new(1e-4, -2e-4, 0.0, 3e-5, 0.0, 0.0);
+    let full = hardening.initial_state();
+    let nan = f64::NAN;
+    for (s, eps, d) in [
+        (sigma, nan, d),
+        (SymTensor { xy: nan, ..sigma }, 0.0, d),
+        (sigma, 0.0, SymTensor { yy: f64::INFINITY, ..d }),
+        (sigma, 0.0, d * 1e308),
+    ] {
+        let (mut s1, mut st1) = (s, DpState { eps_p_bar: eps, ..full });
+        let (mut s2, mut st2) = (s, DpPerfectState { eps_p_bar: eps });
+        let e1 = hardening.update(&mut s1, &mut st1, &d).unwrap_err();
+        let e2 = perfect.update(&mut s2, &mut st2, &d).unwrap_err();
+        assert_eq!(e1.to_string(), e2.to_string());
+        assert_eq!(st2.eps_p_bar.to_bits(), eps.to_bits(), "the state is left untouched");
+    }
 }
 
 /// the random cases must exercise every branch, or the properties above prove little.
