@@ -298,23 +298,8 @@ impl DruckerPrager {
     /// the same material storing only `ε̄ᵖ` per point ([`DpPerfectState`]) when it does not
     /// harden (`H = 0`); `None` otherwise. Its updates give the same stresses, `ε̄ᵖ` and reports.
     pub fn without_hardening(&self) -> Option<DruckerPrager<DpPerfectState>> {
-        (self.params.hardening_modulus == 0.0).then_some(DruckerPrager {
-            params: self.params,
-            elastic: self.elastic,
-            alpha: self.alpha,
-            alpha_g: self.alpha_g,
-            k0: self.k0,
-            two_g: self.two_g,
-            lame: self.lame,
-            nine_k_alpha_g: self.nine_k_alpha_g,
-            iso_h: self.iso_h,
-            kin_h: self.kin_h,
-            inv_d: self.inv_d,
-            inv_b: self.inv_b,
-            inv_alpha: self.inv_alpha,
-            inv_9k: self.inv_9k,
-            variables: PhantomData,
-        })
+        // (the same validated parameters give the same coefficients)
+        DruckerPrager::perfectly_plastic(self.params).ok()
     }
 }
 
