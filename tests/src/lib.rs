@@ -206,7 +206,7 @@ pub mod abe2005 {
 
     /// eq 21: travel of the rigid block until it stops, v0²/(2μg) = 16.99 m.
     pub fn eq21_distance() -> f64 {
-        V0 * V0 / (2.0 * MU * super::STANDARD_GRAVITY)
+        eq21().displacement(eq21().stop_time())
     }
 
     /// eq 21: the time the rigid block's speed falls to [`STOPPED`], (v0 − 0.1)/(μg).
@@ -214,23 +214,34 @@ pub mod abe2005 {
         (V0 - STOPPED) / (MU * super::STANDARD_GRAVITY)
     }
 
+    /// the rigid block of eq 21: 10 m/s on the level with μ = 0.3.
+    pub fn eq21() -> mpm_contact::RigidSlide {
+        mpm_contact::RigidSlide { gravity: super::STANDARD_GRAVITY, mu: MU, slope_rad: 0.0, v0: V0 }
+    }
+
     /// eq 21: rigid displacement at time t (m).
     pub fn eq21_displacement(t: f64) -> f64 {
-        let g = super::STANDARD_GRAVITY;
-        let stop = V0 / (MU * g);
-        let t = t.min(stop);
-        V0 * t - 0.5 * MU * g * t * t
+        eq21().displacement(t)
+    }
+
+    /// the rigid block of eq 22: from rest down a slope θ (degrees) with μ = 0.3.
+    pub fn eq22(theta_deg: f64) -> mpm_contact::RigidSlide {
+        mpm_contact::RigidSlide {
+            gravity: super::STANDARD_GRAVITY,
+            mu: MU,
+            slope_rad: theta_deg.to_radians(),
+            v0: 0.0,
+        }
     }
 
     /// along-slope acceleration g(sin θ − μ cos θ) on a slope θ (degrees); 2.356 m/s² at 30°.
     pub fn eq22_acceleration(theta_deg: f64) -> f64 {
-        let theta = theta_deg.to_radians();
-        (super::STANDARD_GRAVITY * (theta.sin() - MU * theta.cos())).max(0.0)
+        eq22(theta_deg).acceleration().max(0.0)
     }
 
     /// eq 22 along the slope: s = ½ a t² (m).
     pub fn eq22_travel(theta_deg: f64, t: f64) -> f64 {
-        0.5 * eq22_acceleration(theta_deg) * t * t
+        eq22(theta_deg).displacement(t)
     }
 
     /// the block's elastic material.

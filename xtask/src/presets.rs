@@ -1,5 +1,5 @@
 //! The three named presets (`fast`, `balanced`, `accurate`) from the measured Pareto front, and
-//! the code that writes them into the CLI's preset table (`crates/mpm-cli/src/presets.rs`).
+//! the code that writes them into the scene library's preset table (`crates/mpm-scene/src/presets.rs`).
 //!
 //! A preset fixes the scheme, the shape functions and the Courant number (the resolution stays the
 //! scene's). The candidates are the runs of the `preset-sweep`: scheme (MUSL, USAVG) × shape ×
@@ -215,9 +215,9 @@ pub fn derive(runs: &[Run]) -> Result<Presets> {
     Ok(Presets { chosen, table, markdown })
 }
 
-/// writes `chosen` into the `PRESETS` table of `crates/mpm-cli/src/presets.rs` (only that table).
+/// writes `chosen` into the `PRESETS` table of `crates/mpm-scene/src/presets.rs` (only that table).
 pub fn write_table(chosen: &[(&'static str, Candidate)]) -> Result<()> {
-    let path = crate::workspace_root().join("crates/mpm-cli/src/presets.rs");
+    let path = crate::workspace_root().join("crates/mpm-scene/src/presets.rs");
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
     let start = text

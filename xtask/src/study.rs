@@ -9,7 +9,7 @@
 //! shape function × Courant on the sliding block and the bar, feeds the presets.
 //!
 //! Output in `target/study/`: `runs.csv`, `orders.csv`, `pareto.csv`, `presets.md`, PNG plots,
-//! and the preset table written into `crates/mpm-cli/src/presets.rs`.
+//! and the preset table written into `crates/mpm-scene/src/presets.rs`.
 //!
 //! Runs are timed one at a time (never two runs at once) so that wall times are comparable.
 
@@ -449,7 +449,7 @@ pub fn run(quick: bool) -> Result<bool> {
             std::fs::write(dir.join("presets.md"), &p.markdown)?;
             if !quick {
                 crate::presets::write_table(&p.chosen)?;
-                println!("wrote the presets into crates/mpm-cli/src/presets.rs");
+                println!("wrote the presets into crates/mpm-scene/src/presets.rs");
             }
         }
         Err(e) => {

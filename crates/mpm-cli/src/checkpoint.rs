@@ -23,9 +23,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
-use crate::model::SavedState;
 use crate::output::atomic;
 use crate::run::History;
+use mpm_scene::SavedState;
 
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
 /// carries the output time, the solver state the time step's reference densities; 3: the
@@ -72,7 +72,7 @@ fn header(payload: &[u8]) -> Vec<u8> {
     h.extend_from_slice(MAGIC);
     h.extend_from_slice(&FORMAT.to_le_bytes());
     h.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    h.extend_from_slice(&crate::validate::fnv1a(payload).to_le_bytes());
+    h.extend_from_slice(&mpm_scene::fnv1a(payload).to_le_bytes());
     h
 }
 
@@ -123,7 +123,7 @@ fn verify(bytes: &[u8]) -> Result<&[u8], String> {
             payload.len()
         ));
     }
-    let actual = crate::validate::fnv1a(payload);
+    let actual = mpm_scene::fnv1a(payload);
     if actual != checksum {
         return Err(format!(
             "corrupt: checksum {actual:016x} of the content, {checksum:016x} in the header"
@@ -151,7 +151,7 @@ fn decode(payload: &[u8]) -> Result<(CheckpointFile, usize), bincode::error::Dec
 pub(crate) fn state_hash<T: Serialize>(value: &T) -> String {
     let bytes =
         bincode::serde::encode_to_vec(value, bincode::config::standard()).unwrap_or_default();
-    format!("{:016x}", crate::validate::fnv1a(&bytes))
+    format!("{:016x}", mpm_scene::fnv1a(&bytes))
 }
 
 #[cfg(test)]

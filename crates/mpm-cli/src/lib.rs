@@ -42,71 +42,20 @@
 mod checkpoint;
 mod element;
 mod error;
-pub mod limits;
-mod model;
 pub mod output;
-pub mod presets;
 mod progress;
 mod run;
-pub mod scene;
-mod scenes;
-mod source;
 mod summary;
-mod validate;
 
 pub use checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
-pub use error::{RunError, SceneError};
+pub use error::RunError;
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
-pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{DtStats, RunStatus, RunSummary, RunoutMetrics};
-pub use validate::{
-    DEFAULT_ENERGY_ALARM, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, Scene, load_scene_str,
+// The scene library, re-exported so that `mpm_cli::` users keep one import path.
+pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
+pub use mpm_scene::{
+    DEFAULT_ENERGY_ALARM, DEFAULT_SCENE, SCENES, Scene, SceneError, embedded_scene,
+    load_scene_file, load_scene_str, title_of,
 };
-
-/// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
-/// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
-/// refused before parsing; at most that many bytes are read, whatever the file is.
-pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
-    use std::io::Read;
-    let origin = path.display().to_string();
-    let refuse = |problem: String, admissible: &str, fix: &str| SceneError {
-        origin: origin.clone(),
-        line: None,
-        column: None,
-        path: String::new(),
-        value: None,
-        problem,
-        admissible: admissible.into(),
-        fix: fix.into(),
-    };
-    let limit = limits::MAX_SCENE_BYTES;
-    let mut bytes = Vec::new();
-    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(
-        |e| {
-            refuse(
-                format!("cannot read the scene file: {e}"),
-                "",
-                "check the path (`mpm scenes` lists the embedded scenes)",
-            )
-        },
-    )?;
-    if bytes.len() as u64 > limit {
-        return Err(refuse(
-            format!("the scene file is larger than {} MiB", limit >> 20),
-            &format!("a TOML scene of at most {limit} bytes"),
-            "check that this is the scene file; long outlines belong in fewer points",
-        ));
-    }
-    let text = String::from_utf8(bytes).map_err(|e| {
-        refuse(
-            format!(
-                "not a text file: byte {} is not UTF-8 (a scene is TOML text)",
-                e.utf8_error().valid_up_to()
-            ),
-            "a UTF-8 TOML file",
-            "pass the scene's .toml file (`mpm scenes --write flume` writes an example)",
-        )
-    })?;
-    load_scene_str(&text, &origin)
-}
+pub use mpm_scene::{file as scene, limits, presets};

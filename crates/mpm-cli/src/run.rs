@@ -18,14 +18,16 @@ use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::{self, CheckpointFile};
-use crate::error::{RunError, SceneError};
-use crate::model::{self, Job, SavedState, SceneModel};
+use mpm_scene::SceneError;
+
+use crate::error::RunError;
 use crate::output::csv::{self, EnergyRow, ProbeRow};
 use crate::output::plots::{self, Chart, Series, Style};
 use crate::output::{atomic, vtk};
 use crate::progress::Progress;
 use crate::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
-use crate::validate::{GridBuilt, Scene, ground_height, load_scene_str};
+use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
+use mpm_scene::{GridBuilt, Scene, ground_height, load_scene_str};
 
 /// How to run a scene.
 #[derive(Clone, Debug, Default)]
@@ -110,7 +112,7 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             shape: S,
             _materials: Vec<M>,
         ) -> Self::Output {
-            let r = &scene.r;
+            let r = scene.resolved();
             let mut active = std::collections::HashSet::new();
             for (i, seed) in r.seeds.iter().enumerate() {
                 let stencil = shape.stencil(seed.position).map_err(|e| {
@@ -124,7 +126,7 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             };
             let frames =
                 if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
-            let per_frame = vtk::frame_bytes(r.seeds.len(), &r.output.fields, r.output.vtk_format);
+            let per_frame = r.output.vtk_format.frame_bytes(r.seeds.len(), &r.output.fields);
             let apic = r.config.transfer == mpm_solver::Transfer::Apic;
             let state = std::mem::size_of::<M::State>();
             Ok(CheckReport {
@@ -145,12 +147,12 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             })
         }
     }
-    model::dispatch(scene, CheckJob)?
+    dispatch::dispatch(scene, CheckJob)?
 }
 
 fn setup_error(scene: &Scene, message: &str) -> RunError {
     RunError::from(SceneError {
-        origin: scene.origin.clone(),
+        origin: scene.origin().to_string(),
         line: None,
         column: None,
         path: "bodies".into(),
@@ -171,13 +173,13 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
     let _lock = match &opts.out_dir {
         Some(dir) => {
             let lock = prepare_dir(dir, opts.force)?;
-            atomic::write(&dir.join("scene.toml"), scene.text.as_bytes())?;
+            atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
             Some(lock)
         }
         None => None,
     };
-    with_pool(opts, scene.r.seeds.len(), |threads| {
-        model::dispatch(
+    with_pool(opts, scene.resolved().seeds.len(), |threads| {
+        dispatch::dispatch(
             scene,
             RunJob { opts, resume: None, threads, out_dir: opts.out_dir.clone() },
         )?
@@ -200,8 +202,8 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let c = checkpoint::read(&path)?;
     let scene = load_scene_str(&c.scene_text, &c.origin)?;
     fits_its_scene(&c, &scene).map_err(|reason| RunError::Checkpoint { path, reason })?;
-    with_pool(opts, scene.r.seeds.len(), |threads| {
-        model::dispatch(
+    with_pool(opts, scene.resolved().seeds.len(), |threads| {
+        dispatch::dispatch(
             &scene,
             RunJob {
                 opts,
@@ -216,7 +218,7 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
 /// why a decoded checkpoint cannot continue its scene (its clock, counts and history must be
 /// those of a run of it), if it cannot.
 fn fits_its_scene(c: &CheckpointFile, scene: &Scene) -> Result<(), String> {
-    let r = &scene.r;
+    let r = scene.resolved();
     let (time, step, particles) = c.state.clock();
     if !(time.is_finite() && (0.0..=r.end_time).contains(&time)) {
         return Err(format!("time {time:e} s is not between 0 and end_time = {} s", r.end_time));
@@ -447,10 +449,10 @@ impl Job for RunJob<'_> {
         shape: S,
         materials: Vec<M>,
     ) -> Self::Output {
-        let r = &scene.r;
+        let r = scene.resolved();
         let (mut solver, history, fresh) = match self.resume {
             None => {
-                let particles = model::particles(&r.seeds, &materials);
+                let particles = dispatch::particles(&r.seeds, &materials);
                 let s = Solver::new(shape, materials, particles, r.config)
                     .map_err(|e| setup_error(scene, &e.to_string()))?;
                 (s, History { dt_min: f64::INFINITY, ..History::default() }, true)
@@ -626,7 +628,7 @@ impl Driver<'_> {
         &self,
         solver: &Solver<M, S, N>,
     ) -> RunoutMetrics {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let p = solver.particles();
         let column = match &r.grid {
             GridBuilt::Terrain(t) => t.cell_width(),
@@ -647,7 +649,7 @@ impl Driver<'_> {
         &mut self,
         solver: &Solver<M, S, N>,
     ) {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let t = solver.time();
         let ledger = solver.energy();
         if let Some(check) = &mut self.history.energy_check {
@@ -696,7 +698,7 @@ impl Driver<'_> {
         &mut self,
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let Some(dir) = self.dir else { return Ok(()) };
         if !r.output.vtk {
             return Ok(());
@@ -727,7 +729,7 @@ impl Driver<'_> {
         let Some(dir) = self.dir else { return Ok(()) };
         self.flushed = Flushed::default();
         self.flush_series()?;
-        if self.scene.r.output.vtk {
+        if self.scene.resolved().output.vtk {
             atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())?;
         }
         Ok(())
@@ -751,7 +753,7 @@ impl Driver<'_> {
             &mut f.runout,
             csv::runout,
         )?;
-        if !self.scene.r.output.probes.is_empty() {
+        if !self.scene.resolved().output.probes.is_empty() {
             csv::flush(
                 &dir.join("probes.csv"),
                 csv::PROBES_HEADER,
@@ -774,8 +776,8 @@ impl Driver<'_> {
             &CheckpointFile {
                 format: checkpoint::FORMAT,
                 code_version: env!("CARGO_PKG_VERSION").to_string(),
-                origin: self.scene.origin.clone(),
-                scene_text: self.scene.text.clone(),
+                origin: self.scene.origin().to_string(),
+                scene_text: self.scene.text().to_string(),
                 state: M::wrap(solver.checkpoint()),
                 history: self.history.clone(),
             },
@@ -789,12 +791,12 @@ impl Driver<'_> {
         error: Option<String>,
         threads: usize,
     ) -> RunSummary {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let h = &self.history;
         let steps = solver.step_count();
         RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
-            scene_origin: self.scene.origin.clone(),
+            scene_origin: self.scene.origin().to_string(),
             scene_hash: self.scene.hash(),
             status,
             error,
@@ -838,7 +840,7 @@ impl Driver<'_> {
         &self,
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let Some(dir) = self.dir else { return Ok(()) };
         if !r.output.plots {
             return Ok(());
@@ -955,7 +957,7 @@ impl Driver<'_> {
             .iter()
             .filter(|g| g.x > lo && g.x < hi)
             .map(|g| (g.x, g.y))
-            .chain([lo, hi].map(|x| (x, crate::validate::ground_height(&r.ground, x))))
+            .chain([lo, hi].map(|x| (x, mpm_scene::ground_height(&r.ground, x))))
             .collect();
         ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
         let surface = summary::surface(&p.position, &r.ground, r.spacing, column);
@@ -1001,7 +1003,7 @@ impl Driver<'_> {
 
 impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for Driver<'_> {
     fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
-        let r = &self.scene.r;
+        let r = self.scene.resolved();
         let h = &mut self.history;
         // The step that lands on the end time is shortened; it does not count as the smallest.
         if report.time < r.end_time * (1.0 - 1e-12) || h.dt_max == 0.0 {

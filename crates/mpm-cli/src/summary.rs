@@ -6,7 +6,7 @@
 use mpm_solver::{EnergyLedger, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::validate::ground_height;
+use mpm_scene::ground_height;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -75,6 +75,7 @@ mod boundary;
 mod corner;
 mod error;
 mod node_law;
+mod sliding;
 
 /// The vector type of the crate: a 2D f64 vector (x, y), SI units.
 pub type Vector = glam::DVec2;
@@ -83,3 +84,4 @@ pub use boundary::{Boundary, Friction, NORMAL_LENGTH_TOLERANCE};
 pub use corner::{FEASIBILITY_TOLERANCE, apply_all, constrain_velocity_all, try_apply_all};
 pub use error::ContactError;
 pub use node_law::{ContactOutcome, ContactStatus};
+pub use sliding::RigidSlide;

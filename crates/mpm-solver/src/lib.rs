@@ -60,4 +60,4 @@ pub use error::{Field, SolverError};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
 pub use solver::{Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};
-pub use stages::timestep::displacement_dt;
+pub use stages::timestep::{StepLimit, displacement_dt, stable_dt};

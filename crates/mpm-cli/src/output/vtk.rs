@@ -25,8 +25,8 @@ use mpm_constitutive::PlaneTensor;
 use mpm_solver::Particles;
 use rayon::prelude::*;
 
-use crate::model::SceneModel;
-use crate::scene::{VtkField, VtkFormat};
+use mpm_scene::SceneModel;
+use mpm_scene::file::{VtkField, VtkFormat};
 
 /// uncompressed bytes per zlib block of the `compressed` format.
 pub(crate) const BLOCK: usize = 1 << 20;
@@ -170,38 +170,6 @@ fn ascii_array<T: Scalar>(
     out.push_str("        </DataArray>\n");
 }
 
-/// (VTK type size in bytes, components) of a point-data field.
-fn layout(field: VtkField) -> (usize, usize) {
-    match field {
-        VtkField::Stress => (8, 9),
-        VtkField::Velocity | VtkField::Displacement => (8, 3),
-        VtkField::Pressure | VtkField::PlasticStrain | VtkField::Density => (8, 1),
-        VtkField::Body | VtkField::Material => (4, 1),
-    }
-}
-
-/// approximate size (bytes) of one frame of `particles` particles with `fields`.
-pub(crate) fn frame_bytes(particles: usize, fields: &[VtkField], format: VtkFormat) -> u64 {
-    let n = particles as u64;
-    // points (3 × Float64), connectivity and offsets (Int64)
-    let geometry = 24 + 8 + 8;
-    let point_data: u64 = fields
-        .iter()
-        .map(|&f| {
-            let (size, components) = layout(f);
-            (size * components) as u64
-        })
-        .sum();
-    match format {
-        // about 60 bytes of points and cells plus 35 per field value group
-        VtkFormat::Ascii => 400 + (60 + 35 * fields.len() as u64) * n,
-        VtkFormat::Binary => 2000 + (geometry + point_data) * n,
-        // measured: a frame of the flowing flume compresses to 0.6 of the raw size, a body near
-        // rest (regular positions, uniform stress) to far less.
-        VtkFormat::Compressed => 2000 + (geometry + point_data) * n * 6 / 10,
-    }
-}
-
 /// one frame of particles at time `time` (s).
 pub(crate) fn frame<M: SceneModel>(
     p: &Particles<M::State>,
@@ -215,7 +183,7 @@ pub(crate) fn frame<M: SceneModel>(
     let mut a = Arrays {
         format,
         xml: String::with_capacity(if binary { 4000 } else { 200 + n * 200 }),
-        data: Vec::with_capacity(if binary { frame_bytes(n, fields, format) as usize } else { 0 }),
+        data: Vec::with_capacity(if binary { format.frame_bytes(n, fields) as usize } else { 0 }),
         raw: Vec::new(),
     };
     let out = &mut a.xml;
@@ -542,12 +510,12 @@ mod tests {
     fn frame_size_estimates_follow_the_format() {
         let p = particles();
         let binary = write(&p, VtkFormat::Binary).len() as f64;
-        let estimate = frame_bytes(N, &VtkField::ALL, VtkFormat::Binary) as f64;
+        let estimate = VtkFormat::Binary.frame_bytes(N, &VtkField::ALL) as f64;
         assert!((estimate / binary - 1.0).abs() < 0.01, "{estimate} vs {binary}");
         let only = [VtkField::Body];
         assert!(
-            frame_bytes(N, &only, VtkFormat::Binary)
-                < frame_bytes(N, &VtkField::ALL, VtkFormat::Binary)
+            VtkFormat::Binary.frame_bytes(N, &only)
+                < VtkFormat::Binary.frame_bytes(N, &VtkField::ALL)
         );
     }
 }

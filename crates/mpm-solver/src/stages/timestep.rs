@@ -80,37 +80,28 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             });
         }
         let l = self.cell_size;
-        let g = self.config.gravity.length();
         let (v_max, moving) = fastest.speed;
-        match self.config.time_step {
-            TimeStep::Courant(c) => {
-                let dt = (c * l / signal).min(displacement_dt(c * l, v_max, g)).min(max_dt);
-                Ok((dt, dt * signal / l))
-            }
-            TimeStep::Fixed(dt) => {
-                let courant = dt * signal / l;
-                if courant > 1.0 {
-                    return Err(SolverError::CourantExceeded {
-                        step: self.step + 1,
-                        particle,
-                        courant,
-                        speed,
-                        dt,
-                    });
-                }
-                let cells = (v_max * dt + 0.5 * g * dt * dt) / l;
-                if cells > TRUE_COURANT_MAX {
-                    let moving = moving.min(self.particles.len() - 1);
-                    return Err(SolverError::StepTooLong {
-                        step: self.step + 1,
-                        particle: moving,
-                        position: self.particles.position[moving],
-                        cells,
-                        dt,
-                    });
-                }
+        match stable_dt(self.config.time_step, l, self.config.gravity.length(), signal, v_max) {
+            Ok(dt) => {
                 let dt = dt.min(max_dt);
                 Ok((dt, dt * signal / l))
+            }
+            Err(StepLimit::Courant { courant, dt }) => Err(SolverError::CourantExceeded {
+                step: self.step + 1,
+                particle,
+                courant,
+                speed,
+                dt,
+            }),
+            Err(StepLimit::Displacement { cells, dt }) => {
+                let moving = moving.min(self.particles.len() - 1);
+                Err(SolverError::StepTooLong {
+                    step: self.step + 1,
+                    particle: moving,
+                    position: self.particles.position[moving],
+                    cells,
+                    dt,
+                })
             }
         }
     }
@@ -147,6 +138,55 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 pub fn displacement_dt(d: Real, v: Real, g: Real) -> Real {
     // 2d / (v + √(v² + 2gd)): the rationalised root, exact also for g = 0 (d/v).
     2.0 * d / (v + (v * v + 2.0 * g * d).sqrt())
+}
+
+/// Why a fixed Δt cannot run (a Courant Δt always can).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StepLimit {
+    /// the fixed Δt gives the fastest signal a Courant number above 1 (eq 13).
+    Courant {
+        /// Δt·s/L.
+        courant: Real,
+        /// the fixed Δt (s).
+        dt: Real,
+    },
+    /// gravity and the fastest speed carry a particle more than one cell in the fixed Δt.
+    Displacement {
+        /// (|v|_max Δt + ½ |g| Δt²) / L.
+        cells: Real,
+        /// the fixed Δt (s).
+        dt: Real,
+    },
+}
+
+/// The Δt of a step (eq 13 and the displacement bound, module docs) from the fastest signal
+/// `signal` = max_p s_p (m/s) and the fastest speed `v_max` (m/s), with `cell` the smallest cell
+/// size L (m) and `gravity` = |g| (m/s²): C·L/s bounded by [`displacement_dt`] for a Courant
+/// number C, or the fixed Δt after checking it. The solver calls it before every step and a
+/// front end for the first one, so both give the same Δt and refuse the same fixed Δt.
+pub fn stable_dt(
+    time_step: TimeStep,
+    cell: Real,
+    gravity: Real,
+    signal: Real,
+    v_max: Real,
+) -> Result<Real, StepLimit> {
+    match time_step {
+        TimeStep::Courant(c) => {
+            Ok((c * cell / signal).min(displacement_dt(c * cell, v_max, gravity)))
+        }
+        TimeStep::Fixed(dt) => {
+            let courant = dt * signal / cell;
+            if courant > 1.0 {
+                return Err(StepLimit::Courant { courant, dt });
+            }
+            let cells = (v_max * dt + 0.5 * gravity * dt * dt) / cell;
+            if cells > TRUE_COURANT_MAX {
+                return Err(StepLimit::Displacement { cells, dt });
+            }
+            Ok(dt)
+        }
+    }
 }
 
 /// What the time step needs from the particles: the fastest signal max_p s_p and the fastest

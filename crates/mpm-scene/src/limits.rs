@@ -1,6 +1,21 @@
 //! What the machine allows a run: the memory available to this process, and the size of a scene
 //! file. Scenes are checked against these before anything large is allocated.
 
+/// would otherwise exhaust memory before any message).
+pub const MAX_PARTICLES: usize = 20_000_000;
+
+/// Most bodies a scene may declare (the overlap check compares every pair's bounding boxes).
+pub const MAX_BODIES: usize = 10_000;
+
+/// Most vertices of a polygon (the simplicity check compares every pair of edges).
+pub const MAX_VERTICES: usize = 10_000;
+
+/// Most probes a scene may declare.
+pub const MAX_PROBES: usize = 10_000;
+
+/// Largest `particles_per_cell` (n × n per cell).
+pub const MAX_PARTICLES_PER_CELL: i64 = 16;
+
 /// Largest scene file read (bytes). Scenes are hand-written settings and outlines; 4 MiB holds a
 /// profile or polygon of ~100 000 points, and parsing it peaks near 100× its size.
 pub const MAX_SCENE_BYTES: u64 = 4 << 20;

@@ -12,12 +12,12 @@ use mpm_solver::{Checkpoint, NewParticle, Particles};
 use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;
-use crate::scene::ShapeFunctionKind;
-use crate::validate::{GridBuilt, MaterialsBuilt, Scene, Seed};
+use crate::file::ShapeFunctionKind;
+use crate::scene::{GridBuilt, MaterialsBuilt, Scene, Seed};
 
 /// A solver state of either model, as stored in checkpoint files.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) enum SavedState {
+pub enum SavedState {
     /// elastic scenes.
     Elastic(Checkpoint<()>),
     /// Drucker-Prager scenes with a hardening material.
@@ -28,7 +28,7 @@ pub(crate) enum SavedState {
 
 impl SavedState {
     /// (simulated time, steps, particles) of the stored state.
-    pub(crate) fn clock(&self) -> (f64, u64, usize) {
+    pub fn clock(&self) -> (f64, u64, usize) {
         match self {
             SavedState::Elastic(c) => (c.time, c.step, c.particles.len()),
             SavedState::Plastic(c) => (c.time, c.step, c.particles.len()),
@@ -38,7 +38,7 @@ impl SavedState {
 }
 
 /// A constitutive model a scene can use.
-pub(crate) trait SceneModel: ConstitutiveModel + Clone + 'static {
+pub trait SceneModel: ConstitutiveModel + Clone + 'static {
     /// wraps a solver checkpoint for storage.
     fn wrap(c: Checkpoint<Self::State>) -> SavedState;
     /// unwraps a stored checkpoint of this model (`None` for the other model).
@@ -82,7 +82,7 @@ impl SceneModel for DruckerPrager<DpPerfectState> {
 }
 
 /// Work generic over the model and the shape functions.
-pub(crate) trait Job {
+pub trait Job {
     /// what the job returns.
     type Output;
     /// runs with concrete types.
@@ -95,7 +95,7 @@ pub(crate) trait Job {
 }
 
 /// Builds the scene's shape functions and materials and runs `job` with them.
-pub(crate) fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
+pub fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, SceneError> {
     let r = &scene.r;
     fn with_shape<J: Job, M: SceneModel>(
         scene: &Scene,
@@ -138,7 +138,7 @@ pub(crate) fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, Scene
 }
 
 /// The scene's particles with each material's initial state.
-pub(crate) fn particles<M: SceneModel>(seeds: &[Seed], materials: &[M]) -> Particles<M::State> {
+pub fn particles<M: SceneModel>(seeds: &[Seed], materials: &[M]) -> Particles<M::State> {
     let mut p = Particles::with_capacity(seeds.len());
     for s in seeds {
         let state =

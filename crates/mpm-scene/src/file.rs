@@ -2,7 +2,7 @@
 //!
 //! Every table refuses unknown fields. Kind-dependent fields (a terrain grid's `profile`, a
 //! Drucker-Prager material's `cohesion`, a rectangle's `min`) are optional here and checked
-//! against their `kind` or `shape` in `validate.rs`, which can then say which field is
+//! against their `kind` or `shape` in `validate/`, which can then say which field is
 //! missing or does not belong, with its line and column. `docs/scene-format.md` documents each
 //! field with its unit, default and admissible range.
 //!
@@ -430,6 +430,16 @@ impl VtkField {
         VtkField::Material,
         VtkField::Density,
     ];
+
+    /// (VTK type size in bytes, components) of the field's point-data array.
+    pub fn layout(self) -> (usize, usize) {
+        match self {
+            VtkField::Stress => (8, 9),
+            VtkField::Velocity | VtkField::Displacement => (8, 3),
+            VtkField::Pressure | VtkField::PlasticStrain | VtkField::Density => (8, 1),
+            VtkField::Body | VtkField::Material => (4, 1),
+        }
+    }
 }
 
 /// How the VTK frames store their arrays.
@@ -452,6 +462,29 @@ impl VtkFormat {
             VtkFormat::Binary => "binary",
             VtkFormat::Compressed => "compressed",
             VtkFormat::Ascii => "ascii",
+        }
+    }
+
+    /// approximate size (bytes) of one frame of `particles` particles with `fields`: what the
+    /// memory check before a run charges for the frame being written.
+    pub fn frame_bytes(self, particles: usize, fields: &[VtkField]) -> u64 {
+        let n = particles as u64;
+        // points (3 × Float64), connectivity and offsets (Int64)
+        let geometry = 24 + 8 + 8;
+        let point_data: u64 = fields
+            .iter()
+            .map(|&f| {
+                let (size, components) = f.layout();
+                (size * components) as u64
+            })
+            .sum();
+        match self {
+            // about 60 bytes of points and cells plus 35 per field value group
+            VtkFormat::Ascii => 400 + (60 + 35 * fields.len() as u64) * n,
+            VtkFormat::Binary => 2000 + (geometry + point_data) * n,
+            // measured: a frame of the flowing flume compresses to 0.6 of the raw size, a body
+            // near rest (regular positions, uniform stress) to far less.
+            VtkFormat::Compressed => 2000 + (geometry + point_data) * n * 6 / 10,
         }
     }
 }

@@ -10,7 +10,7 @@
 
 use mpm_solver::Scheme;
 
-use crate::scene::{Preset, ShapeFunctionKind};
+use crate::file::{Preset, ShapeFunctionKind};
 
 /// What a preset sets.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,93 @@
+//! Scenes for the granular MPM solver: what a run is, independent of the front end that starts
+//! it (the `mpm` command, `cargo xtask`, bindings, a GUI).
+//!
+//! - [`file`] is the TOML scene format's data model (`docs/scene-format.md` its reference);
+//!   [`load_scene_str`] and [`load_scene_file`] parse and validate a scene into a [`Scene`]:
+//!   the grid, the materials, the particle seeds, the solver configuration, the first Δt and the
+//!   output plan ([`Resolved`]). Every refusal is a [`SceneError`] naming the file, line and
+//!   column, field path, value, admissible range and fix. Validation runs one module per section
+//!   (`validate/`: solver, grid, materials, bodies, boundaries, output).
+//! - [`embedded_scene`] returns the paper's scenes compiled in (the default is the dry-sand flume
+//!   of §7); [`presets`] the measured speed/accuracy settings.
+//! - [`dispatch`] is the one place where a scene's run-time choices (constitutive model, shape
+//!   functions) become types: it builds them and calls a generic [`Job`], so that nothing below
+//!   dispatches per particle.
+//!
+//! ```
+//! use mpm_scene::{embedded_scene, load_scene_str};
+//!
+//! let scene = load_scene_str(embedded_scene("flume").unwrap(), "embedded:flume").unwrap();
+//! assert_eq!(scene.particle_count(), 336);
+//! // The first Δt follows eq 13 with the paper's Courant number 0.1.
+//! assert!(scene.initial_dt() > 0.0 && scene.initial_dt() < 1e-3);
+//! ```
+
+// A SceneError carries everything a user needs to fix a scene (file, line, column, path, value,
+// range, fix); it is returned once, before any step, so its size costs nothing.
+#![allow(clippy::result_large_err)]
+
+pub mod dispatch;
+mod error;
+pub mod file;
+pub mod limits;
+pub mod presets;
+mod scene;
+mod scenes;
+mod source;
+mod validate;
+
+pub use dispatch::{Job, SavedState, SceneModel, dispatch};
+pub use error::SceneError;
+pub use scene::{
+    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, MaterialsBuilt, Reference,
+    Resolved, ResolvedOutput, Scene, Seed, fnv1a, ground_height, segment_at,
+};
+pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
+pub use validate::load_scene_str;
+
+/// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
+/// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
+/// refused before parsing; at most that many bytes are read, whatever the file is.
+pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
+    use std::io::Read;
+    let origin = path.display().to_string();
+    let refuse = |problem: String, admissible: &str, fix: &str| SceneError {
+        origin: origin.clone(),
+        line: None,
+        column: None,
+        path: String::new(),
+        value: None,
+        problem,
+        admissible: admissible.into(),
+        fix: fix.into(),
+    };
+    let limit = limits::MAX_SCENE_BYTES;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(
+        |e| {
+            refuse(
+                format!("cannot read the scene file: {e}"),
+                "",
+                "check the path (`mpm scenes` lists the embedded scenes)",
+            )
+        },
+    )?;
+    if bytes.len() as u64 > limit {
+        return Err(refuse(
+            format!("the scene file is larger than {} MiB", limit >> 20),
+            &format!("a TOML scene of at most {limit} bytes"),
+            "check that this is the scene file; long outlines belong in fewer points",
+        ));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        refuse(
+            format!(
+                "not a text file: byte {} is not UTF-8 (a scene is TOML text)",
+                e.utf8_error().valid_up_to()
+            ),
+            "a UTF-8 TOML file",
+            "pass the scene's .toml file (`mpm scenes --write flume` writes an example)",
+        )
+    })?;
+    load_scene_str(&text, &origin)
+}

@@ -1,0 +1,242 @@
+//! From scene text to a [`Scene`] that can run: parse, check every value, build the grid, the
+//! materials and the particle seeds, and map every refusal to its field path, line and column.
+//!
+//! Order of checks: TOML syntax and types (serde) → solver settings → grid → materials → bodies
+//! (shape, inside the grid, no overlap) → boundaries → the first Δt → output, one module a
+//! section. The first problem found is
+//! reported; nothing runs until the whole scene is consistent.
+//!
+//! A scene uses one constitutive model for all bodies (the solver is generic over it, with no
+//! per-particle dispatch): a scene whose bodies use both elastic and Drucker-Prager materials is
+//! refused with an error that says so.
+
+mod bodies;
+mod boundaries;
+mod grid;
+mod materials;
+mod output;
+mod solver;
+
+use crate::error::SceneError;
+use crate::file::*;
+use crate::scene::{Resolved, Scene};
+use crate::source::SourceMap;
+
+/// Formats a number for a message: plain for ordinary magnitudes, scientific otherwise.
+pub(crate) fn num(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && (x.abs() >= 1e6 || x.abs() < 1e-3) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+fn pair(p: [f64; 2]) -> String {
+    format!("[{}, {}]", num(p[0]), num(p[1]))
+}
+
+/// Builds errors located in one scene text.
+struct Ctx<'a> {
+    origin: &'a str,
+    map: &'a SourceMap,
+}
+
+impl Ctx<'_> {
+    fn err(
+        &self,
+        path: &str,
+        value: Option<String>,
+        problem: impl Into<String>,
+        admissible: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> SceneError {
+        let (line, column) = match self.map.locate(path) {
+            Some((l, c)) => (Some(l), Some(c)),
+            None => (None, None),
+        };
+        SceneError {
+            origin: self.origin.to_string(),
+            line,
+            column,
+            path: path.to_string(),
+            value,
+            problem: problem.into(),
+            admissible: admissible.into(),
+            fix: fix.into(),
+        }
+    }
+
+    /// a required-by-kind field is missing.
+    fn missing(&self, path: &str, why: &str, example: &str) -> SceneError {
+        self.err(
+            path,
+            None,
+            format!("missing field ({why})"),
+            String::new(),
+            format!("add `{} = {example}`", path.rsplit('.').next().unwrap_or(path)),
+        )
+    }
+
+    /// a field that does not belong to this kind.
+    fn foreign(&self, path: &str, why: &str) -> SceneError {
+        self.err(
+            path,
+            None,
+            format!("this field does not apply here ({why})"),
+            String::new(),
+            "remove it, or change the `kind`/`shape` it belongs to",
+        )
+    }
+
+    /// a number outside its range.
+    fn range(&self, path: &str, value: f64, admissible: &str, fix: &str) -> SceneError {
+        self.err(path, Some(num(value)), "value out of range", admissible, fix)
+    }
+}
+
+/// Parses and validates a scene; `origin` names the text in messages (a path, or
+/// `embedded:NAME`).
+pub fn load_scene_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+    let map = SourceMap::new(text);
+    let ctx = Ctx { origin, map: &map };
+    let file: SceneFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
+    let r = resolve(&ctx, &file)?;
+    Ok(Scene { origin: origin.to_string(), text: text.to_string(), file, r })
+}
+
+/// Maps a TOML syntax or serde error to a located [`SceneError`].
+fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
+    let message = e.message().trim().to_string();
+    let span = e.span();
+    let mut path = span.as_ref().map(|s| ctx.map.path_at(s.start)).unwrap_or_default();
+    let quoted = |prefix: &str| -> Option<String> {
+        let rest = message.strip_prefix(prefix)?;
+        let rest = rest.strip_prefix('`')?;
+        rest.find('`').map(|k| rest[..k].to_string())
+    };
+    let (problem, admissible, fix) = if let Some(field) = quoted("unknown field ") {
+        if !path.ends_with(&field) {
+            path = join(&path, &field);
+        }
+        let admissible = message
+            .split_once(", expected ")
+            .map(|(_, a)| a.to_string())
+            .or_else(|| message.contains("there are no fields").then(|| "no fields".into()))
+            .unwrap_or_default();
+        (
+            format!("unknown field `{field}`"),
+            admissible,
+            format!(
+                "remove `{field}` or correct its spelling (every field is listed in \
+                 docs/scene-format.md)"
+            ),
+        )
+    } else if let Some(field) = quoted("missing field ") {
+        // A span covering the whole text is the top-level table, and so are the top-level
+        // sections, whatever key the span starts at (a file beginning with `title` that lacks
+        // `[grid]` must not be told to add `grid` to `title`).
+        let top = ["grid", "materials", "bodies", "solver"].contains(&field.as_str());
+        if top || span.as_ref().is_some_and(|s| s.start == 0 && s.end + 1 >= ctx.map.len()) {
+            path.clear();
+        }
+        if !path.ends_with(&field) {
+            path = join(&path, &field);
+        }
+        let table = path.rsplit_once('.').map_or("the top level", |(t, _)| t).to_string();
+        (
+            format!("missing field `{field}`"),
+            String::new(),
+            if !top {
+                format!("add `{field} = ...` to `{table}` (see docs/scene-format.md)")
+            } else if field == "bodies" {
+                "add a `[[bodies]]` table (see docs/scene-format.md)".to_string()
+            } else {
+                format!("add a `[{field}]` table (see docs/scene-format.md)")
+            },
+        )
+    } else if let Some(v) = quoted("unknown variant ") {
+        let admissible =
+            message.split_once(", expected ").map(|(_, a)| a.to_string()).unwrap_or_default();
+        (format!("unknown name `{v}`"), admissible, "use one of the admissible names".to_string())
+    } else if message.starts_with("invalid type") || message.starts_with("invalid length") {
+        let admissible =
+            message.split_once(", expected ").map(|(_, a)| a.to_string()).unwrap_or_default();
+        (message.clone(), admissible, "write the value with the expected type".to_string())
+    } else if message.starts_with("expected exactly 2 values") {
+        (
+            message.clone(),
+            "two numbers [x, y]".to_string(),
+            "write exactly two values, e.g. `[0.25, 0.25]`".to_string(),
+        )
+    } else if span.is_some() && path.is_empty() {
+        (
+            format!("TOML syntax error: {message}"),
+            String::new(),
+            "correct the TOML syntax at this position".to_string(),
+        )
+    } else {
+        (message.clone(), String::new(), "see docs/scene-format.md".to_string())
+    };
+    let (line, column) = match span {
+        Some(s) => {
+            let (l, c) = ctx.map.line_col(s.start);
+            (Some(l), Some(c))
+        }
+        None => match ctx.map.locate(&path) {
+            Some((l, c)) => (Some(l), Some(c)),
+            None => (None, None),
+        },
+    };
+    SceneError {
+        origin: ctx.origin.to_string(),
+        line,
+        column,
+        path,
+        value: None,
+        problem,
+        admissible,
+        fix,
+    }
+}
+
+fn join(a: &str, b: &str) -> String {
+    if a.is_empty() { b.to_string() } else { format!("{a}.{b}") }
+}
+
+fn finite_pos(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+/// Checks the sections in the order the module docs give and derives what the run needs.
+fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
+    let settings = solver::settings(ctx, &f.solver)?;
+    let (grid, ground, cell_x) = grid::build(ctx, &f.grid)?;
+    let shape_function = grid::shape_function(ctx, &f.solver, settings.preset, &grid)?;
+    let built = materials::build(ctx, f)?;
+    bodies::count(ctx, f)?;
+    let (materials, used, kind) = materials::select(ctx, f, &built)?;
+    let (seeds, spacing, gimp_ppc) =
+        bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
+    let boundaries = boundaries::build(ctx, f)?;
+    let config = solver::config(ctx, &f.solver, &settings, boundaries, kind)?;
+    let initial_dt =
+        solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
+    let end_time = f.solver.end_time;
+    let output =
+        output::build(ctx, &f.output, end_time, &seeds, &grid, &config.boundaries, config.gravity)?;
+    Ok(Resolved {
+        grid,
+        shape_function,
+        gimp_ppc,
+        materials,
+        seeds,
+        config,
+        end_time,
+        output,
+        ground,
+        spacing,
+        initial_dt,
+        alarm: settings.alarm,
+        max_steps: settings.max_steps,
+    })
+}

@@ -1,0 +1,195 @@
+//! `[output]`: frame and series intervals, VTK fields, probes and the analytic reference curve.
+
+use mpm_contact::{Friction, RigidSlide};
+use mpm_solver::{Boundaries, Vector};
+
+use super::{Ctx, finite_pos, pair};
+use crate::error::SceneError;
+use crate::file::{OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
+use crate::limits::MAX_PROBES;
+use crate::scene::{GridBuilt, Reference, ResolvedOutput, Seed, segment_at};
+
+/// The output plan of a run that ends at `end_time` (s).
+pub(super) fn build(
+    ctx: &Ctx<'_>,
+    o: &OutputSpec,
+    end_time: f64,
+    seeds: &[Seed],
+    grid: &GridBuilt,
+    boundaries: &Boundaries,
+    gravity: Vector,
+) -> Result<ResolvedOutput, SceneError> {
+    let interval = o.interval.unwrap_or(end_time / 50.0);
+    if !(finite_pos(interval) && end_time / interval <= 1e6) {
+        return Err(ctx.range(
+            "output.interval",
+            interval,
+            "0 < interval, at most 1e6 frames over end_time (s)",
+            "give the time between frames in seconds, e.g. end_time / 50",
+        ));
+    }
+    let series_interval = o.series_interval.unwrap_or(interval.min(end_time / 200.0));
+    if !(finite_pos(series_interval) && end_time / series_interval <= 1e7) {
+        return Err(ctx.range(
+            "output.series_interval",
+            series_interval,
+            "0 < series_interval, at most 1e7 rows over end_time (s)",
+            "remove it to use the default min(interval, end_time / 200)",
+        ));
+    }
+    if let Some(c) = o.checkpoint_interval {
+        if !finite_pos(c) {
+            return Err(ctx.range(
+                "output.checkpoint_interval",
+                c,
+                "0 < checkpoint_interval (s of simulated time)",
+                "give the simulated time between checkpoints, or remove it",
+            ));
+        }
+    }
+    if let Some(fields) = &o.fields {
+        if let Some(k) = (1..fields.len()).find(|&k| fields[..k].contains(&fields[k])) {
+            let name = toml::Value::try_from(fields[k]).map(|v| v.to_string()).unwrap_or_default();
+            return Err(ctx.err(
+                &format!("output.fields[{k}]"),
+                Some(name),
+                "the field is listed twice (each .vtp would hold two arrays of that name)",
+                "each field at most once",
+                "remove the repeated entry",
+            ));
+        }
+    }
+    if let Some(list) = o.probes.as_ref().filter(|l| l.len() > MAX_PROBES) {
+        return Err(ctx.err(
+            "output.probes",
+            Some(format!("{} probes", list.len())),
+            "too many probes",
+            format!("at most {MAX_PROBES} probes (each writes a row per series interval)"),
+            "probe a few particles; the particle frames hold every particle",
+        ));
+    }
+    let probes = probes(ctx, o, seeds)?;
+    let reference = match o.reference {
+        None => None,
+        Some(curve) => Some(reference(ctx, curve, &probes, seeds, grid, boundaries, gravity)?),
+    };
+    Ok(ResolvedOutput {
+        interval,
+        series_interval,
+        fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
+        vtk: o.vtk.unwrap_or(true),
+        vtk_format: o.vtk_format.unwrap_or_default(),
+        plots: o.plots.unwrap_or(true),
+        probes,
+        reference,
+        checkpoint_interval: o.checkpoint_interval,
+    })
+}
+
+/// The probed particles' indices.
+fn probes(ctx: &Ctx<'_>, o: &OutputSpec, seeds: &[Seed]) -> Result<Vec<usize>, SceneError> {
+    let mut probes = Vec::new();
+    for (k, probe) in o.probes.iter().flatten().enumerate() {
+        let path = format!("output.probes[{k}]");
+        match *probe {
+            ProbeSpec::Index(i) => {
+                if !(i >= 0 && (i as usize) < seeds.len()) {
+                    return Err(ctx.err(
+                        &path,
+                        Some(i.to_string()),
+                        "no particle has this index",
+                        format!("0 ≤ index < {} (the scene's particle count)", seeds.len()),
+                        "use a smaller index, or { nearest = [x, y] }",
+                    ));
+                }
+                probes.push(i as usize);
+            }
+            ProbeSpec::Nearest(at) => {
+                if !(at[0].is_finite() && at[1].is_finite()) {
+                    return Err(ctx.err(
+                        &path,
+                        Some(pair(at)),
+                        "the point is not finite",
+                        "finite coordinates (m)",
+                        "give a point inside a body",
+                    ));
+                }
+                let at = Vector::new(at[0], at[1]);
+                let nearest = seeds
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| {
+                        a.1.position
+                            .distance_squared(at)
+                            .total_cmp(&b.1.position.distance_squared(at))
+                    })
+                    .map_or(0, |(i, _)| i);
+                probes.push(nearest);
+            }
+        }
+    }
+    Ok(probes)
+}
+
+/// The rigid block (eqs 21–22) the first probe is compared with, its friction from the ground.
+fn reference(
+    ctx: &Ctx<'_>,
+    curve: ReferenceCurve,
+    probes: &[usize],
+    seeds: &[Seed],
+    grid: &GridBuilt,
+    boundaries: &Boundaries,
+    gravity: Vector,
+) -> Result<Reference, SceneError> {
+    let path = "output.reference";
+    let value = Some(format!("\"{}\"", curve.name()));
+    let Some(&probe) = probes.first() else {
+        return Err(ctx.err(
+            path,
+            value,
+            "a reference curve is compared with probe particles, but there are none",
+            "at least one entry in output.probes",
+            "add `probes = [0]` (or { nearest = [x, y] }) to [output]",
+        ));
+    };
+    let mu = match boundaries.ground {
+        Some(Friction::Coulomb { mu }) => mu,
+        _ => {
+            return Err(ctx.err(
+                path,
+                value,
+                "the reference curve needs Coulomb friction on the ground",
+                "boundaries.ground = { friction = μ }, { friction_angle_deg = φ } or \
+                 \"frictionless\"",
+                "declare the ground's friction in [boundaries]",
+            ));
+        }
+    };
+    let gravity = gravity.length();
+    match curve {
+        ReferenceCurve::Abe2005Eq21 => Ok(Reference {
+            curve,
+            slide: RigidSlide { gravity, mu, slope_rad: 0.0, v0: seeds[probe].velocity.x },
+            direction: Vector::X,
+        }),
+        ReferenceCurve::Abe2005Eq22 => {
+            let GridBuilt::Terrain(t) = grid else {
+                return Err(ctx.err(
+                    path,
+                    value,
+                    "eq 22 is a slide down an inclined ground, but the grid is regular",
+                    "a terrain grid whose ground under the probe is inclined",
+                    "use `kind = \"terrain\"` with a sloping profile, or abe2005_eq21",
+                ));
+            };
+            let (a, b) = segment_at(t.profile(), seeds[probe].position.x);
+            let d = (b - a).normalize_or_zero();
+            let down = if d.y <= 0.0 { d } else { -d };
+            Ok(Reference {
+                curve,
+                slide: RigidSlide { gravity, mu, slope_rad: (-down.y).asin(), v0: 0.0 },
+                direction: down,
+            })
+        }
+    }
+}

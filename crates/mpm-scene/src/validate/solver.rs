@@ -1,0 +1,253 @@
+//! `[solver]`: scheme, time step, gravity, thresholds, and the first Δt (eq 13).
+
+use mpm_solver::{
+    Boundaries, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
+};
+
+use super::{Ctx, finite_pos, num, pair};
+use crate::error::SceneError;
+use crate::file::{MaterialKind, SolverSpec};
+use crate::presets::{self, PresetSettings};
+use crate::scene::{
+    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, MaterialsBuilt, Seed,
+};
+
+/// The `[solver]` settings, checked, with the preset's and the defaults filled in.
+pub(super) struct Settings {
+    pub preset: Option<PresetSettings>,
+    pub scheme: Scheme,
+    pub time_step: TimeStep,
+    pub gravity: Vector,
+    pub gravity_ramp: f64,
+    pub small_mass_ratio: f64,
+    pub alarm: EnergyAlarm,
+    pub max_steps: u64,
+}
+
+/// Checks `[solver]` except what needs the grid, materials and bodies (the first Δt).
+pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneError> {
+    if !(finite_pos(s.end_time) && s.end_time <= 1e7) {
+        return Err(ctx.range(
+            "solver.end_time",
+            s.end_time,
+            "0 < end_time ≤ 1e7 (s)",
+            "give the simulated duration in seconds, e.g. `end_time = 3.0`",
+        ));
+    }
+    let preset = s.preset.map(presets::settings);
+    let scheme = s.scheme.or(preset.map(|p| p.scheme)).unwrap_or(Scheme::Usavg);
+    let time_step = match (s.courant, s.dt) {
+        (Some(_), Some(_)) => {
+            return Err(ctx.err(
+                "solver.dt",
+                s.dt.map(num),
+                "both `courant` and `dt` are given",
+                "one of them: a Courant number (adaptive Δt) or a fixed Δt",
+                "remove `dt` (recommended) or `courant`",
+            ));
+        }
+        (Some(c), None) => {
+            if !(c > 0.0 && c <= 1.0) {
+                return Err(ctx.range(
+                    "solver.courant",
+                    c,
+                    "0 < courant ≤ 1 (explicit stability, eq 13)",
+                    "use the paper's advice `courant = 0.1`; above 1 the explicit step is \
+                     unstable",
+                ));
+            }
+            TimeStep::Courant(c)
+        }
+        (None, Some(dt)) => {
+            if !finite_pos(dt) {
+                return Err(ctx.range(
+                    "solver.dt",
+                    dt,
+                    "0 < dt < ∞ (s), with a Courant number ≤ 1",
+                    "give a positive time step, or use `courant = 0.1` instead",
+                ));
+            }
+            TimeStep::Fixed(dt)
+        }
+        (None, None) => TimeStep::Courant(preset.map_or(0.1, |p| p.courant)),
+    };
+    let gravity = s.gravity.unwrap_or([0.0, -mpm_solver::STANDARD_GRAVITY]);
+    if !(gravity[0].is_finite() && gravity[1].is_finite()) {
+        return Err(ctx.err(
+            "solver.gravity",
+            Some(pair(gravity)),
+            "gravity is not finite",
+            "finite components (m/s²)",
+            "use `gravity = [0.0, -9.81]`",
+        ));
+    }
+    let gravity_ramp = s.gravity_ramp.unwrap_or(0.0);
+    if !(gravity_ramp.is_finite() && gravity_ramp >= 0.0) {
+        return Err(ctx.range(
+            "solver.gravity_ramp",
+            gravity_ramp,
+            "0 ≤ gravity_ramp < ∞ (s); 0 applies gravity at once",
+            "remove it or give a non-negative time",
+        ));
+    }
+    let small_mass_ratio = s.small_mass_ratio.unwrap_or(1e-4);
+    if !(0.0..1.0).contains(&small_mass_ratio) {
+        return Err(ctx.range(
+            "solver.small_mass_ratio",
+            small_mass_ratio,
+            "0 ≤ small_mass_ratio < 1 (fraction of the mean particle mass)",
+            "remove it to use the default 1e-4",
+        ));
+    }
+
+    let alarm = EnergyAlarm {
+        threshold: s.energy_alarm.unwrap_or(DEFAULT_ENERGY_ALARM),
+        stop: s.energy_alarm_stop.unwrap_or(false),
+    };
+    if !(finite_pos(alarm.threshold)) {
+        return Err(ctx.range(
+            "solver.energy_alarm",
+            alarm.threshold,
+            "0 < energy_alarm < ∞ (fraction of the run's energy scale)",
+            "remove it to use the default 0.2, or give e.g. `energy_alarm = 0.1`",
+        ));
+    }
+    let max_steps = s.max_steps.unwrap_or(DEFAULT_MAX_STEPS as i64);
+    if max_steps < 1 {
+        return Err(ctx.range(
+            "solver.max_steps",
+            max_steps as f64,
+            "max_steps ≥ 1",
+            "remove it to use the default 100 000 000",
+        ));
+    }
+    let max_steps = max_steps as u64;
+    Ok(Settings {
+        preset,
+        scheme,
+        time_step,
+        gravity: Vector::new(gravity[0], gravity[1]),
+        gravity_ramp,
+        small_mass_ratio,
+        alarm,
+        max_steps,
+    })
+}
+
+/// The solver configuration of a scene whose materials are of `kind`.
+pub(super) fn config(
+    ctx: &Ctx<'_>,
+    s: &SolverSpec,
+    settings: &Settings,
+    boundaries: Boundaries,
+    kind: MaterialKind,
+) -> Result<SolverConfig, SceneError> {
+    let config = SolverConfig {
+        scheme: settings.scheme,
+        time_step: settings.time_step,
+        gravity: settings.gravity,
+        boundaries,
+        small_mass_ratio: settings.small_mass_ratio,
+        objective_stress: s.objective_stress.unwrap_or(kind == MaterialKind::DruckerPrager),
+        gravity_ramp: settings.gravity_ramp,
+        transfer: s.transfer.unwrap_or_default(),
+        contact: s.contact.unwrap_or_default(),
+    };
+    config.validate().map_err(|e| solver_error(ctx, e))?;
+    Ok(config)
+}
+
+/// The Δt of the first step, by the solver's own rule ([`mpm_solver::stable_dt`]) applied to the
+/// seeds, and the refusal of a scene that cannot finish within `max_steps`.
+pub(super) fn first_dt(
+    ctx: &Ctx<'_>,
+    s: &SolverSpec,
+    config: &SolverConfig,
+    grid: &GridBuilt,
+    materials: &MaterialsBuilt,
+    seeds: &[Seed],
+    max_steps: u64,
+) -> Result<f64, SceneError> {
+    let min_cell = match grid {
+        GridBuilt::Terrain(t) => t.min_cell_size(),
+        GridBuilt::Regular(r) => r.min_cell_size(),
+    };
+    let p_modulus = materials.p_wave_moduli();
+    let (signal, fastest) = seeds.iter().enumerate().fold((0.0f64, 0usize), |acc, (i, s)| {
+        let c = (p_modulus[usize::from(s.material)] / s.density).sqrt() + s.velocity.length();
+        if c > acc.0 { (c, i) } else { acc }
+    });
+    let v_max = seeds.iter().map(|s| s.velocity.length()).fold(0.0, f64::max);
+    let g_abs = config.gravity.length();
+    let initial_dt = match stable_dt(config.time_step, min_cell, g_abs, signal, v_max) {
+        Ok(dt) => dt,
+        Err(StepLimit::Courant { courant, dt }) => {
+            return Err(ctx.err(
+                "solver.dt",
+                Some(num(dt)),
+                format!(
+                    "the fixed time step gives a Courant number {courant:.3} > 1 at t = 0 \
+                     (particle {fastest}: wave speed + speed {} m/s, smallest cell {} m)",
+                    num(signal),
+                    num(min_cell)
+                ),
+                format!("dt ≤ {} s (Courant number ≤ 1, eq 13)", num(min_cell / signal)),
+                format!(
+                    "use `dt = {}` (Courant 0.1) or replace `dt` by `courant = 0.1`",
+                    num(0.1 * min_cell / signal)
+                ),
+            ));
+        }
+        Err(StepLimit::Displacement { cells, dt }) => {
+            let most = mpm_solver::displacement_dt(min_cell, v_max, g_abs);
+            return Err(ctx.err(
+                "solver.dt",
+                Some(num(dt)),
+                format!(
+                    "with the fixed time step, gravity and the initial speed carry a particle \
+                     {cells:.3} cells in the first step (smallest cell {} m)",
+                    num(min_cell)
+                ),
+                format!("dt ≤ {} s (at most one cell per step)", num(most)),
+                "use `courant = 0.1` instead of `dt` (Δt then follows the material)",
+            ));
+        }
+    };
+    let steps = (s.end_time / initial_dt).ceil();
+    if steps.is_nan() || steps > max_steps as f64 {
+        let shown = if steps < 1e15 { format!("{steps:.0}") } else { format!("{steps:.3e}") };
+        let (path, value) = match (s.dt, s.courant) {
+            (Some(dt), _) => ("solver.dt", dt),
+            (None, Some(c)) => ("solver.courant", c),
+            (None, None) => ("solver.end_time", s.end_time),
+        };
+        return Err(ctx.err(
+            path,
+            Some(num(value)),
+            format!(
+                "the run would take {shown} steps or more (initial Δt {} s to end_time {} s), \
+                 above max_steps = {max_steps}; the fastest signal is {} m/s at particle \
+                 {fastest} (wave speed √(M/ρ) of its material plus its speed)",
+                num(initial_dt),
+                num(s.end_time),
+                num(signal)
+            ),
+            format!("end_time / Δt ≤ max_steps = {max_steps}"),
+            "check the material's density and stiffness and the Courant number or dt (they set \
+             Δt, eq 13), shorten end_time, or raise `[solver] max_steps`",
+        ));
+    }
+    Ok(initial_dt)
+}
+
+fn solver_error(ctx: &Ctx<'_>, e: SolverError) -> SceneError {
+    match e {
+        SolverError::InvalidSetting { name, value, expected } => ctx.range(
+            &format!("solver.{name}"),
+            value,
+            expected,
+            "see docs/scene-format.md for the admissible range",
+        ),
+        other => ctx.err("solver", None, other.to_string(), String::new(), String::new()),
+    }
+}
