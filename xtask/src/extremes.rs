@@ -44,7 +44,7 @@ use crate::table::{Status, Table, num, pct};
 /// The bound on |energy residual| for a run that completes.
 const ENERGY_BOUND: f64 = 0.01;
 /// `mpm run`'s default alarm threshold (whose doc gives the measurements behind it).
-const ALARM: f64 = mpm_cli::DEFAULT_ENERGY_ALARM;
+const ALARM: f64 = mpm_scene::DEFAULT_ENERGY_ALARM;
 /// Most steps a row may take (keeps the command at a few minutes); end times are shortened to fit.
 const MAX_STEPS: f64 = 30_000.0;
 

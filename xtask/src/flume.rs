@@ -8,14 +8,13 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use mpm_cli::scene::ShapeFunctionKind;
-use mpm_cli::{
-    RunOptions, RunStatus, RunSummary, Scene, embedded_scene, load_scene_str, run_scene,
-};
+use mpm_cli::{RunOptions, RunStatus, RunSummary, run_scene};
+use mpm_scene::file::ShapeFunctionKind;
+use mpm_scene::{Scene, embedded_scene, load_scene_str};
 use mpm_solver::Scheme;
 use mpm_tests::{Cost, Discretisation, ShapeKind};
 
-use crate::study::{Case, Run};
+use crate::runs::{Case, Run};
 use crate::table::{Status, Table, num, pct};
 
 /// Energy closure of the flume: |residual| ≤ 5 % of the energy dissipated. Not a reference value:
@@ -195,14 +194,14 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
     for scheme in Scheme::ALL {
         plan.push(("scheme".into(), Discretisation { scheme, ..baseline }));
     }
-    for courant in crate::study::COURANTS {
+    for courant in crate::runs::COURANTS {
         plan.push(("courant".into(), Discretisation { courant, ..baseline }));
     }
     // The presets' sweep: on the terrain grid a preset's shape function becomes bilinear, so
     // only scheme × Courant matter here.
     let schemes: &[Scheme] = if quick { &[Scheme::Usavg] } else { &[Scheme::Musl, Scheme::Usavg] };
     for &scheme in schemes {
-        for courant in crate::study::COURANTS {
+        for courant in crate::runs::COURANTS {
             plan.push(("preset-sweep".into(), Discretisation { scheme, courant, ..baseline }));
         }
     }

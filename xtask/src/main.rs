@@ -12,6 +12,7 @@ mod extremes;
 mod flume;
 mod plot;
 mod presets;
+mod runs;
 mod study;
 mod table;
 mod verify;

@@ -22,7 +22,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use mpm_solver::Scheme;
 use mpm_tests::ShapeKind;
 
-use crate::study::{Case, Run};
+use crate::runs::{Case, Run};
 use crate::table::{Status, Table, num, pct};
 
 /// The `fast` preset must still pass the verification tolerance of 1 % on both cases.

@@ -24,8 +24,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
 use crate::output::atomic;
-use crate::run::History;
+use crate::output::csv::{EnergyRow, ProbeRow};
+use crate::summary::RunoutMetrics;
 use mpm_scene::SavedState;
+use mpm_solver::EnergyCheck;
 
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
 /// carries the output time, the solver state the time step's reference densities; 3: the
@@ -152,6 +154,36 @@ pub(crate) fn state_hash<T: Serialize>(value: &T) -> String {
     let bytes =
         bincode::serde::encode_to_vec(value, bincode::config::standard()).unwrap_or_default();
     format!("{:016x}", mpm_scene::fnv1a(&bytes))
+}
+
+/// Output history carried in checkpoints so that a resumed run continues its files.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub(crate) struct History {
+    pub(crate) energy: Vec<EnergyRow>,
+    pub(crate) probes: Vec<ProbeRow>,
+    pub(crate) runout: Vec<RunoutMetrics>,
+    /// (time, file relative to the output directory).
+    pub(crate) frames: Vec<(f64, String)>,
+    /// index k of the last frame time k·interval taken.
+    pub(crate) frame_slot: u64,
+    pub(crate) series_slot: u64,
+    pub(crate) checkpoint_slot: u64,
+    pub(crate) dt_min: f64,
+    pub(crate) dt_max: f64,
+    pub(crate) dt_first: f64,
+    /// wall time and particle-steps of earlier sessions.
+    pub(crate) wall_time: f64,
+    pub(crate) particle_steps: f64,
+    /// wall time spent writing frames and time series, over all sessions (s).
+    #[serde(default)]
+    pub(crate) output_time: f64,
+    pub(crate) initial: Option<RunoutMetrics>,
+    /// the energy residual against its scale, from the first series row on.
+    #[serde(default)]
+    pub(crate) energy_check: Option<EnergyCheck>,
+    /// when the energy alarm first tripped (s).
+    #[serde(default)]
+    pub(crate) alarm_time: Option<f64>,
 }
 
 #[cfg(test)]

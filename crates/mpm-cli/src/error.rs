@@ -26,11 +26,13 @@ pub enum RunError {
          for it, choose another directory with --out, or delete the lock file if no such run is \
          active",
         dir.display(),
-        dir.join(crate::run::LOCK_FILE).display()
+        lock.display()
     )]
     Locked {
         /// the directory.
         dir: PathBuf,
+        /// its lock file.
+        lock: PathBuf,
         /// the holder's process id.
         pid: u32,
     },

@@ -17,7 +17,7 @@ use mpm_grid::ShapeFunctions;
 use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, CheckpointFile};
+use crate::checkpoint::{self, CheckpointFile, History};
 use mpm_scene::SceneError;
 
 use crate::error::RunError;
@@ -45,36 +45,6 @@ pub struct RunOptions {
     pub stop_after: Option<f64>,
     /// set to true (e.g. by a Ctrl-C handler) to stop after the current step with a checkpoint.
     pub interrupt: Option<Arc<AtomicBool>>,
-}
-
-/// Output history carried in checkpoints so that a resumed run continues its files.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub(crate) struct History {
-    energy: Vec<EnergyRow>,
-    probes: Vec<ProbeRow>,
-    runout: Vec<RunoutMetrics>,
-    /// (time, file relative to the output directory).
-    frames: Vec<(f64, String)>,
-    /// index k of the last frame time k·interval taken.
-    frame_slot: u64,
-    series_slot: u64,
-    checkpoint_slot: u64,
-    dt_min: f64,
-    dt_max: f64,
-    dt_first: f64,
-    /// wall time and particle-steps of earlier sessions.
-    wall_time: f64,
-    particle_steps: f64,
-    /// wall time spent writing frames and time series, over all sessions (s).
-    #[serde(default)]
-    output_time: f64,
-    initial: Option<RunoutMetrics>,
-    /// the energy residual against its scale, from the first series row on.
-    #[serde(default)]
-    energy_check: Option<EnergyCheck>,
-    /// when the energy alarm first tripped (s).
-    #[serde(default)]
-    alarm_time: Option<f64>,
 }
 
 /// What `mpm check` reports.
@@ -307,7 +277,11 @@ impl DirLock {
         std::fs::write(&mine, format!("{pid}\n"))
             .map_err(|source| RunError::Io { path: mine.clone(), source })?;
         let locked = |holder: Option<u32>| {
-            Err(RunError::Locked { dir: dir.to_path_buf(), pid: holder.unwrap_or(0) })
+            Err(RunError::Locked {
+                dir: dir.to_path_buf(),
+                lock: path.clone(),
+                pid: holder.unwrap_or(0),
+            })
         };
         let mut result = locked(None);
         // A few attempts: after taking over a stale lock, or when the holder ended meanwhile.

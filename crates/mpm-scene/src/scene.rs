@@ -6,9 +6,7 @@ use mpm_contact::RigidSlide;
 use mpm_grid::{RegularGrid, TerrainGrid};
 use mpm_solver::{SolverConfig, Vector};
 
-use crate::error::SceneError;
 use crate::file::{ReferenceCurve, SceneFile, ShapeFunctionKind, VtkField, VtkFormat};
-use crate::validate::load_scene_str;
 
 /// A validated scene, ready to run.
 #[derive(Clone, Debug)]
@@ -226,24 +224,6 @@ impl Scene {
     /// the shape functions the run will use.
     pub fn shape_function(&self) -> ShapeFunctionKind {
         self.r.shape_function
-    }
-
-    /// the same scene with `edit` applied to its file, re-rendered as TOML and validated again
-    /// (for studies that vary a setting).
-    pub fn modified(&self, edit: impl FnOnce(&mut SceneFile)) -> Result<Scene, SceneError> {
-        let mut file = self.file.clone();
-        edit(&mut file);
-        let text = toml::to_string(&file).map_err(|e| SceneError {
-            origin: self.origin.clone(),
-            line: None,
-            column: None,
-            path: String::new(),
-            value: None,
-            problem: format!("the modified scene cannot be written as TOML: {e}"),
-            admissible: String::new(),
-            fix: "use finite values".into(),
-        })?;
-        load_scene_str(&text, &format!("{} (modified)", self.origin))
     }
 }
 

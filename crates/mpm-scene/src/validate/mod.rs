@@ -104,6 +104,26 @@ pub fn load_scene_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
     Ok(Scene { origin: origin.to_string(), text: text.to_string(), file, r })
 }
 
+impl Scene {
+    /// the same scene with `edit` applied to its file, re-rendered as TOML and validated again
+    /// (for studies that vary a setting).
+    pub fn modified(&self, edit: impl FnOnce(&mut SceneFile)) -> Result<Scene, SceneError> {
+        let mut file = self.file.clone();
+        edit(&mut file);
+        let text = toml::to_string(&file).map_err(|e| SceneError {
+            origin: self.origin.clone(),
+            line: None,
+            column: None,
+            path: String::new(),
+            value: None,
+            problem: format!("the modified scene cannot be written as TOML: {e}"),
+            admissible: String::new(),
+            fix: "use finite values".into(),
+        })?;
+        load_scene_str(&text, &format!("{} (modified)", self.origin))
+    }
+}
+
 /// Maps a TOML syntax or serde error to a located [`SceneError`].
 fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
     let message = e.message().trim().to_string();
