@@ -206,7 +206,7 @@ pub mod abe2005 {
 
     /// eq 21: travel of the rigid block until it stops, v0²/(2μg) = 16.99 m.
     pub fn eq21_distance() -> f64 {
-        eq21().displacement(eq21().stop_time())
+        V0 * V0 / (2.0 * MU * super::STANDARD_GRAVITY)
     }
 
     /// eq 21: the time the rigid block's speed falls to [`STOPPED`], (v0 − 0.1)/(μg).

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::RunError;
 use crate::output::atomic;
 use crate::output::csv::{EnergyRow, ProbeRow};
-use crate::summary::RunoutMetrics;
+use mpm_scene::RunoutMetrics;
 use mpm_scene::SavedState;
 use mpm_solver::EnergyCheck;
 

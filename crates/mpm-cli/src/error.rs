@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use mpm_scene::SceneError;
 
-use crate::summary::RunSummary;
+use mpm_scene::RunSummary;
 
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]

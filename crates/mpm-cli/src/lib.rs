@@ -10,8 +10,8 @@
 //!   [`check_scene`] validates fully without stepping.
 //! - [`run_element_test`] runs the constitutive element tests.
 //!
-//! The solver is generic over the constitutive model and the shape functions; this crate picks
-//! them once per scene (`model.rs`), so no per-particle dynamic dispatch happens.
+//! The solver is generic over the constitutive model and the shape functions; `mpm_scene::dispatch`
+//! picks them once per scene, so no per-particle dynamic dispatch happens.
 //!
 //! Output directory layout of a run:
 //! ```text
@@ -45,13 +45,12 @@ mod error;
 pub mod output;
 mod progress;
 mod run;
-mod summary;
 
 pub use checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
+pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
-pub use summary::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 // The scene library, re-exported so that `mpm_cli::` users keep one import path.
 pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
 pub use mpm_scene::{

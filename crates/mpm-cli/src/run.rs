@@ -25,8 +25,8 @@ use crate::output::csv::{self, EnergyRow, ProbeRow};
 use crate::output::plots::{self, Chart, Series, Style};
 use crate::output::{atomic, vtk};
 use crate::progress::Progress;
-use crate::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
 use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
+use mpm_scene::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
 use mpm_scene::{GridBuilt, Scene, ground_height, load_scene_str};
 
 /// How to run a scene.
@@ -878,6 +878,8 @@ impl Driver<'_> {
                     });
                     if rf.direction == Vector::X {
                         "displacement along x (m)"
+                    } else if rf.direction == -Vector::X {
+                        "displacement along −x (m)"
                     } else {
                         "displacement down the slope (m)"
                     }

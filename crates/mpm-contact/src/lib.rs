@@ -4,6 +4,7 @@
 //! The crate works on one grid node at a time: its mass, its start-of-step velocity, its trial
 //! acceleration f/m, and the boundaries it lies on. It knows nothing of particles, materials or the
 //! grid's geometry.
+//! [`RigidSlide`] is the law's analytic reference: a rigid block sliding on one plane (eqs 21–22).
 //!
 //! ```
 //! use mpm_contact::{Boundary, ContactStatus, Friction, Vector};

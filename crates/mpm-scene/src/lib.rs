@@ -9,6 +9,7 @@
 //!   (`validate/`: solver, grid, materials, bodies, boundaries, output).
 //! - [`embedded_scene`] returns the paper's scenes compiled in (the default is the dry-sand flume
 //!   of §7); [`presets`] the measured speed/accuracy settings.
+//! - [`summary`]: what a run reports ([`RunSummary`]) and the runout measures it is built from.
 //! - [`dispatch`] is the one place where a scene's run-time choices (constitutive model, shape
 //!   functions) become types: it builds them and calls a generic [`Job`], so that nothing below
 //!   dispatches per particle.
@@ -34,6 +35,7 @@ pub mod presets;
 mod scene;
 mod scenes;
 mod source;
+pub mod summary;
 mod validate;
 
 pub use dispatch::{Job, SavedState, SceneModel, dispatch};
@@ -43,6 +45,7 @@ pub use scene::{
     Resolved, ResolvedOutput, Scene, Seed, fnv1a, ground_height, segment_at,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
+pub use summary::{DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
 pub use validate::load_scene_str;
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]

@@ -1,6 +1,8 @@
-//! What the machine allows a run: the memory available to this process, and the size of a scene
-//! file. Scenes are checked against these before anything large is allocated.
+//! What the machine allows a run: the memory available to this process, the size of a scene
+//! file, and the guards on particles, bodies, vertices and probes. Scenes are checked against
+//! these before anything large is allocated.
 
+/// Most particles a scene may generate (a guard against a typo such as a 1e-6 m cell, which
 /// would otherwise exhaust memory before any message).
 pub const MAX_PARTICLES: usize = 20_000_000;
 

@@ -148,7 +148,7 @@ pub struct Resolved {
     pub ground: Vec<Vector>,
     /// smallest particle spacing (m).
     pub spacing: f64,
-    /// the time step the first step will take (s) and its Courant number.
+    /// the time step the first step will take (s).
     pub initial_dt: f64,
     /// when the energy residual stops or flags a run.
     pub alarm: EnergyAlarm,

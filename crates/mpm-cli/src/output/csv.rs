@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
 use crate::output::atomic;
-use crate::summary::RunoutMetrics;
+use mpm_scene::RunoutMetrics;
 
 /// One row of `energy.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

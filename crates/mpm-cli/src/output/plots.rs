@@ -1,6 +1,7 @@
-//! PNG plots with plotters: one chart function ([`chart`]) drawing lines, dashed lines and
-//! points, used for the energy history, probe displacement against its analytic curve, the
-//! runout history, the final deposit and the element tests.
+//! PNG plots with plotters, the project's one chart module: [`chart`] draws lines, dashed lines
+//! and points (the energy history, probe displacement against its analytic curve, the runout
+//! history, the final deposit, the element tests) and [`figure`] several such charts side by side
+//! (`cargo xtask`'s reports).
 //!
 //! The font (DejaVu Sans, see `assets/DejaVuSans-LICENSE.txt`) is compiled in, so plots need no
 //! system font.
@@ -17,9 +18,9 @@ use crate::output::atomic;
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-/// registers the embedded font as plotters' "sans-serif" (once per process). Call before drawing
-/// text with plotters anywhere (`cargo xtask` does, for its own charts).
-pub fn register_font() {
+/// registers the embedded font as plotters' "sans-serif" (once per process): plotters draws text
+/// only with a registered font.
+fn register_font() {
     REGISTER.call_once(|| {
         // The embedded font is a valid TTF; if registration failed, text would be missing but
         // the plot would still be drawn.
@@ -107,14 +108,45 @@ fn bounds(series: &[Series]) -> (f64, f64, f64, f64) {
 
 /// draws `series` into the PNG at `path` (written atomically).
 pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), RunError> {
+    figure(path, &[(c.clone(), series.to_vec())], 1, c.size)
+}
+
+/// draws `panels` side by side, `columns` per row, into one PNG of `size` pixels at `path`
+/// (written atomically); each panel's own `size` is ignored.
+pub fn figure(
+    path: &Path,
+    panels: &[(Chart<'_>, Vec<Series>)],
+    columns: usize,
+    size: (u32, u32),
+) -> Result<(), RunError> {
     register_font();
     let tmp = atomic::temp_path(path);
     let fail =
         |e: String| RunError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
+    {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+        let rows = panels.len().div_ceil(columns.max(1)).max(1);
+        let areas = root.split_evenly((rows, columns.max(1)));
+        for ((c, series), area) in panels.iter().zip(&areas) {
+            panel(area, c, series).map_err(|e| fail(format!("chart `{}`: {e}", c.title)))?;
+        }
+        root.present().map_err(|e| fail(e.to_string()))?;
+    }
+    atomic::commit(&tmp, path)
+}
+
+/// draws one chart into `area`.
+fn panel(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    c: &Chart<'_>,
+    series: &[Series],
+) -> Result<(), String> {
     let (mut x0, mut x1, mut y0, mut y1) = bounds(series);
     if c.equal_aspect {
         // plotting area ≈ size minus margins and label areas
-        let (w, h) = (f64::from(c.size.0) - 110.0, f64::from(c.size.1) - 110.0);
+        let (w, h) = area.dim_in_pixel();
+        let (w, h) = (f64::from(w) - 110.0, f64::from(h) - 110.0);
         let (sx, sy) = ((x1 - x0) / w, (y1 - y0) / h);
         if sx > sy {
             let mid = 0.5 * (y0 + y1);
@@ -126,62 +158,58 @@ pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), RunErr
             x1 = mid + 0.5 * sy * w;
         }
     }
-    {
-        let root = BitMapBackend::new(&tmp, c.size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(c.title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| fail(e.to_string()))?;
-        chart
-            .configure_mesh()
-            .x_desc(c.x_label)
-            .y_desc(c.y_label)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .light_line_style(WHITE.mix(0.0))
-            .draw()
-            .map_err(|e| fail(e.to_string()))?;
-        let mut any_legend = false;
-        for s in series {
-            let color = PALETTE[s.color % PALETTE.len()];
-            let pts: Vec<(f64, f64)> =
-                s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
-            let anno = match s.style {
-                Style::Line | Style::Thick => {
-                    let width = if s.style == Style::Thick { 3 } else { 2 };
-                    chart
-                        .draw_series(LineSeries::new(pts, color.stroke_width(width)))
-                        .map_err(|e| fail(e.to_string()))?
-                }
-                Style::Dashed => chart
-                    .draw_series(DashedLineSeries::new(pts, 8, 5, color.stroke_width(2)))
-                    .map_err(|e| fail(e.to_string()))?,
-                Style::Points => chart
-                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))
-                    .map_err(|e| fail(e.to_string()))?,
-            };
-            if !s.name.is_empty() {
-                any_legend = true;
-                anno.label(s.name.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+    let fail = |e: &dyn std::fmt::Display| e.to_string();
+    let mut chart = ChartBuilder::on(area)
+        .caption(c.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| fail(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc(c.x_label)
+        .y_desc(c.y_label)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(|e| fail(&e))?;
+    let mut any_legend = false;
+    for s in series {
+        let color = PALETTE[s.color % PALETTE.len()];
+        let pts: Vec<(f64, f64)> =
+            s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+        let anno = match s.style {
+            Style::Line | Style::Thick => {
+                let width = if s.style == Style::Thick { 3 } else { 2 };
+                chart
+                    .draw_series(LineSeries::new(pts, color.stroke_width(width)))
+                    .map_err(|e| fail(&e))?
             }
+            Style::Dashed => chart
+                .draw_series(DashedLineSeries::new(pts, 8, 5, color.stroke_width(2)))
+                .map_err(|e| fail(&e))?,
+            Style::Points => chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))
+                .map_err(|e| fail(&e))?,
+        };
+        if !s.name.is_empty() {
+            any_legend = true;
+            anno.label(s.name.clone()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
         }
-        if any_legend {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| fail(e.to_string()))?;
-        }
-        root.present().map_err(|e| fail(e.to_string()))?;
     }
-    atomic::commit(&tmp, path)
+    if any_legend {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| fail(&e))?;
+    }
+    Ok(())
 }

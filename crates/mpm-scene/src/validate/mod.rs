@@ -2,9 +2,9 @@
 //! materials and the particle seeds, and map every refusal to its field path, line and column.
 //!
 //! Order of checks: TOML syntax and types (serde) → solver settings → grid → materials → bodies
-//! (shape, inside the grid, no overlap) → boundaries → the first Δt → output, one module a
-//! section. The first problem found is
-//! reported; nothing runs until the whole scene is consistent.
+//! (shape, inside the grid, no overlap) → boundaries → the solver configuration as a whole → the
+//! first Δt → output; each section has its module. The first problem found is reported; nothing
+//! runs until the whole scene is consistent.
 //!
 //! A scene uses one constitutive model for all bodies (the solver is generic over it, with no
 //! per-particle dispatch): a scene whose bodies use both elastic and Drucker-Prager materials is

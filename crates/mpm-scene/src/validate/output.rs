@@ -167,11 +167,15 @@ fn reference(
     };
     let gravity = gravity.length();
     match curve {
-        ReferenceCurve::Abe2005Eq21 => Ok(Reference {
-            curve,
-            slide: RigidSlide { gravity, mu, slope_rad: 0.0, v0: seeds[probe].velocity.x },
-            direction: Vector::X,
-        }),
+        ReferenceCurve::Abe2005Eq21 => {
+            // the block slides along ±x, whichever way the probe starts
+            let vx = seeds[probe].velocity.x;
+            Ok(Reference {
+                curve,
+                slide: RigidSlide { gravity, mu, slope_rad: 0.0, v0: vx.abs() },
+                direction: if vx < 0.0 { -Vector::X } else { Vector::X },
+            })
+        }
         ReferenceCurve::Abe2005Eq22 => {
             let GridBuilt::Terrain(t) = grid else {
                 return Err(ctx.err(
@@ -191,5 +195,34 @@ fn reference(
                 direction: down,
             })
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{embedded_scene, load_scene_str};
+
+    /// Eq 21 is the mirror image for a block thrown towards −x: the same travel along −x (before
+    /// this, a negative speed gave a negative stop time and a reference that never moved).
+    #[test]
+    fn eq21_follows_the_probe_whichever_way_it_starts() {
+        let text = embedded_scene("sliding_horizontal").unwrap();
+        let right = load_scene_str(text, "embedded:sliding_horizontal").unwrap();
+        let left = right
+            .modified(|f| {
+                for b in &mut f.bodies {
+                    b.velocity = b.velocity.map(|v| [-v[0], v[1]]);
+                }
+            })
+            .unwrap();
+        let r = right.resolved().output.reference.unwrap();
+        let l = left.resolved().output.reference.unwrap();
+        assert_eq!(l.direction, -r.direction);
+        for t in [0.5, 2.0, 5.0] {
+            assert_eq!(l.displacement(t), r.displacement(t));
+        }
+        // 10 m/s with μ = 0.3: 10·0.5 − ½·0.3·9.81·0.25 m after 0.5 s (1e-12: two roundings).
+        let expected = 10.0 * 0.5 - 0.5 * 0.3 * 9.81 * 0.25;
+        assert!((r.displacement(0.5) - expected).abs() < 1e-12, "{}", r.displacement(0.5));
     }
 }

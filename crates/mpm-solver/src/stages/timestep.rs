@@ -163,7 +163,8 @@ pub enum StepLimit {
 /// `signal` = max_p s_p (m/s) and the fastest speed `v_max` (m/s), with `cell` the smallest cell
 /// size L (m) and `gravity` = |g| (m/s²): C·L/s bounded by [`displacement_dt`] for a Courant
 /// number C, or the fixed Δt after checking it. The solver calls it before every step and a
-/// front end for the first one, so both give the same Δt and refuse the same fixed Δt.
+/// front end for the first one, so both apply one rule (a front end computing c = √(M/ρ) from
+/// the initial density may differ from the solver's M·V/m in the last bit).
 pub fn stable_dt(
     time_step: TimeStep,
     cell: Real,

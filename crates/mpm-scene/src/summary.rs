@@ -1,12 +1,13 @@
-//! What a run reports: [`RunSummary`] (written as `summary.json`) and the runout metrics of a
-//! flow.
+//! What a run reports, whatever front end ran it: [`RunSummary`] (the `mpm` command writes it as
+//! `summary.json`) and the runout measures of a flow ([`runout`], [`surface`]), taken from the
+//! particles' positions over the ground.
 //!
 //! Field names are stable: `cargo xtask` and scripts read them.
 
 use mpm_solver::{EnergyLedger, Vector};
 use serde::{Deserialize, Serialize};
 
-use mpm_scene::ground_height;
+use crate::scene::ground_height;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -149,7 +150,7 @@ pub struct RunSummary {
 
 /// Runout metrics of `positions` (masses `mass`) over `ground`, with particle spacing `spacing`
 /// and column width `column`, relative to the state `initial` (pass `None` at t = 0).
-pub(crate) fn runout(
+pub fn runout(
     time: f64,
     positions: &[Vector],
     mass: &[f64],
@@ -219,7 +220,7 @@ fn main_mass_extent(positions: &[Vector], mass: &[f64], gap: f64) -> (f64, f64, 
 /// The free surface: per column of width `column` holding particles, (column centre x, surface
 /// height, ground height), the surface being the highest particle above the ground there plus
 /// half a spacing.
-pub(crate) fn surface(
+pub fn surface(
     positions: &[Vector],
     ground: &[Vector],
     spacing: f64,
