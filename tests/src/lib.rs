@@ -13,8 +13,8 @@ use std::ops::ControlFlow;
 use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};
 use mpm_contact::Friction;
 use mpm_grid::{
-    Bilinear, Gimp, KinkPolicy, QuadraticBSpline, RegularGrid, ShapeFunctions, TerrainGrid,
-    TerrainGridSpec,
+    Bilinear, KinkPolicy, RegularGrid, ShapeFunctions, ShapeJob, TerrainGrid, TerrainGridSpec,
+    with_regular_shape,
 };
 use mpm_solver::generate::{Shape, fill};
 use mpm_solver::{
@@ -84,30 +84,9 @@ fn setup<E: std::fmt::Display>(e: E) -> CaseError {
     CaseError::Setup(e.to_string())
 }
 
-/// Shape functions on a regular grid (the terrain grid offers bilinear only).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ShapeKind {
-    /// Bilinear (the paper's; N = 4): has the cell-crossing error of §2(3).
-    Bilinear,
-    /// uGIMP with the particle size of `ppc` particles per cell (N = 9).
-    Gimp,
-    /// Quadratic B-splines (N = 9).
-    BSpline,
-}
-
-impl ShapeKind {
-    /// every shape function, cheapest first.
-    pub const ALL: [ShapeKind; 3] = [ShapeKind::Bilinear, ShapeKind::Gimp, ShapeKind::BSpline];
-
-    /// short name for tables.
-    pub fn name(self) -> &'static str {
-        match self {
-            ShapeKind::Bilinear => "bilinear",
-            ShapeKind::Gimp => "uGIMP",
-            ShapeKind::BSpline => "B-spline",
-        }
-    }
-}
+/// Shape functions on a regular grid (the terrain grid offers bilinear only); uGIMP takes the
+/// particle size of `ppc` particles per cell.
+pub use mpm_grid::RegularShape as ShapeKind;
 
 /// The numerical choices of a run: resolution, scheme, shape functions and time step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,26 +117,6 @@ pub struct Cost {
     pub steps: u64,
     /// Particles in the scene.
     pub particles: usize,
-}
-
-/// Runs `$body` with `$shape` bound to the shape functions of `$kind` on the regular grid `$grid`.
-macro_rules! with_regular_shape {
-    ($kind:expr, $grid:expr, $ppc:expr, |$shape:ident| $body:expr) => {
-        match $kind {
-            ShapeKind::Bilinear => {
-                let $shape = Bilinear($grid);
-                $body
-            }
-            ShapeKind::Gimp => {
-                let $shape = Gimp::with_particles_per_cell($grid, [$ppc, $ppc]).map_err(setup)?;
-                $body
-            }
-            ShapeKind::BSpline => {
-                let $shape = QuadraticBSpline::new($grid);
-                $body
-            }
-        }
-    };
 }
 
 /// Records a value every `every` steps, through the solver's observer hook.
@@ -292,7 +251,15 @@ pub fn sliding_horizontal(d: &Discretisation) -> Result<Sliding, CaseError> {
         ..Default::default()
     };
     let elastic = material()?;
-    with_regular_shape!(d.shape, grid, d.ppc, |shape| slide_on(shape, elastic, particles, config))
+    /// the slide as a job over the shape functions.
+    struct Slide(LinearElastic, Particles<()>, SolverConfig);
+    impl ShapeJob for Slide {
+        type Output = Result<Sliding, CaseError>;
+        fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> Self::Output {
+            slide_on(shape, self.0, self.1, self.2)
+        }
+    }
+    with_regular_shape(d.shape, grid, d.ppc, Slide(elastic, particles, config)).map_err(setup)?
 }
 
 fn slide_on<S: ShapeFunctions<N>, const N: usize>(
@@ -563,7 +530,15 @@ pub fn vibrating_bar(d: &Discretisation) -> Result<Bar, CaseError> {
         [(28.0 / cell) as usize, (3.0 / cell) as usize],
     )
     .map_err(setup)?;
-    with_regular_shape!(d.shape, grid, d.ppc, |shape| bar_on(shape, d))
+    /// the bar as a job over the shape functions.
+    struct OnShape<'a>(&'a Discretisation);
+    impl ShapeJob for OnShape<'_> {
+        type Output = Result<Bar, CaseError>;
+        fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> Self::Output {
+            bar_on(shape, self.0)
+        }
+    }
+    with_regular_shape(d.shape, grid, d.ppc, OnShape(d)).map_err(setup)?
 }
 
 fn bar_on<S: ShapeFunctions<N>, const N: usize>(

@@ -52,6 +52,7 @@
 mod active;
 mod bilinear;
 mod bspline;
+mod dispatch;
 mod error;
 mod gimp;
 pub mod math;
@@ -64,6 +65,7 @@ mod terrain;
 pub use active::{ActiveNodes, BLOCK_SIDE};
 pub use bilinear::{Bilinear, TerrainFactors};
 pub use bspline::QuadraticBSpline;
+pub use dispatch::{RegularShape, ShapeJob, with_regular_shape};
 pub use error::{GridError, LocateError};
 pub use gimp::{AxisFactors, Gimp};
 pub use math::{Matrix, Real, Vector};

@@ -7,7 +7,7 @@
 use mpm_constitutive::{
     ConstitutiveModel, DpPerfectState, DpState, DruckerPrager, LinearElastic, PlaneTensor,
 };
-use mpm_grid::{Bilinear, Gimp, QuadraticBSpline, ShapeFunctions};
+use mpm_grid::{Bilinear, RegularShape, ShapeFunctions, ShapeJob, with_regular_shape};
 use mpm_solver::{Checkpoint, NewParticle, Particles};
 use serde::{Deserialize, Serialize};
 
@@ -102,30 +102,40 @@ pub fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, SceneError> 
         job: J,
         materials: Vec<M>,
     ) -> Result<J::Output, SceneError> {
+        /// the scene's job as a job over the shape functions alone.
+        struct WithModel<'a, J, M> {
+            job: J,
+            scene: &'a Scene,
+            materials: Vec<M>,
+        }
+        impl<J: Job, M: SceneModel> ShapeJob for WithModel<'_, J, M> {
+            type Output = J::Output;
+            fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> J::Output {
+                self.job.run(self.scene, shape, self.materials)
+            }
+        }
         let r = &scene.r;
-        Ok(match (&r.grid, r.shape_function) {
-            (GridBuilt::Terrain(t), _) => job.run(scene, Bilinear(t.clone()), materials),
-            (GridBuilt::Regular(g), ShapeFunctionKind::Bilinear) => {
-                job.run(scene, Bilinear(*g), materials)
+        match &r.grid {
+            GridBuilt::Terrain(t) => Ok(job.run(scene, Bilinear(t.clone()), materials)),
+            GridBuilt::Regular(g) => {
+                let kind = match r.shape_function {
+                    ShapeFunctionKind::Bilinear => RegularShape::Bilinear,
+                    ShapeFunctionKind::Gimp => RegularShape::Gimp,
+                    ShapeFunctionKind::Bspline => RegularShape::BSpline,
+                };
+                let job = WithModel { job, scene, materials };
+                with_regular_shape(kind, *g, r.gimp_ppc, job).map_err(|e| SceneError {
+                    origin: scene.origin.clone(),
+                    line: None,
+                    column: None,
+                    path: "solver.shape_function".into(),
+                    value: Some(format!("\"{}\"", r.shape_function.name())),
+                    problem: e.to_string(),
+                    admissible: "particles_per_cell ≥ 1".into(),
+                    fix: "check particles_per_cell".into(),
+                })
             }
-            (GridBuilt::Regular(g), ShapeFunctionKind::Gimp) => {
-                let gimp =
-                    Gimp::with_particles_per_cell(*g, [r.gimp_ppc; 2]).map_err(|e| SceneError {
-                        origin: scene.origin.clone(),
-                        line: None,
-                        column: None,
-                        path: "solver.shape_function".into(),
-                        value: Some("\"gimp\"".into()),
-                        problem: e.to_string(),
-                        admissible: "particles_per_cell ≥ 1".into(),
-                        fix: "check particles_per_cell".into(),
-                    })?;
-                job.run(scene, gimp, materials)
-            }
-            (GridBuilt::Regular(g), ShapeFunctionKind::Bspline) => {
-                job.run(scene, QuadraticBSpline::new(*g), materials)
-            }
-        })
+        }
     }
     match &r.materials {
         MaterialsBuilt::Elastic(m) => with_shape(scene, job, m.clone()),
