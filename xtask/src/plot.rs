@@ -86,5 +86,7 @@ pub fn figure(
             (chart, series)
         })
         .collect();
+    let charts: Vec<(Chart<'_>, &[plots::Series])> =
+        charts.iter().map(|(c, s)| (c.clone(), s.as_slice())).collect();
     plots::figure(path, &charts, columns, (width, height)).map_err(|e| anyhow!("{e}"))
 }

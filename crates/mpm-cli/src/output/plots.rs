@@ -108,14 +108,14 @@ fn bounds(series: &[Series]) -> (f64, f64, f64, f64) {
 
 /// draws `series` into the PNG at `path` (written atomically).
 pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), RunError> {
-    figure(path, &[(c.clone(), series.to_vec())], 1, c.size)
+    figure(path, &[(c.clone(), series)], 1, c.size)
 }
 
 /// draws `panels` side by side, `columns` per row, into one PNG of `size` pixels at `path`
 /// (written atomically); each panel's own `size` is ignored.
 pub fn figure(
     path: &Path,
-    panels: &[(Chart<'_>, Vec<Series>)],
+    panels: &[(Chart<'_>, &[Series])],
     columns: usize,
     size: (u32, u32),
 ) -> Result<(), RunError> {
@@ -123,17 +123,24 @@ pub fn figure(
     let tmp = atomic::temp_path(path);
     let fail =
         |e: String| RunError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
-    {
+    let drawn = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
         let rows = panels.len().div_ceil(columns.max(1)).max(1);
         let areas = root.split_evenly((rows, columns.max(1)));
         for ((c, series), area) in panels.iter().zip(&areas) {
-            panel(area, c, series).map_err(|e| fail(format!("chart `{}`: {e}", c.title)))?;
+            panel(area, c, series).map_err(|e| format!("chart `{}`: {e}", c.title))?;
         }
-        root.present().map_err(|e| fail(e.to_string()))?;
+        root.present().map_err(|e| e.to_string())
+    })();
+    match drawn {
+        Ok(()) => atomic::commit(&tmp, path),
+        Err(e) => {
+            // plotters writes what it drew when the backend is dropped: leave no partial file
+            let _ = std::fs::remove_file(&tmp);
+            Err(fail(e))
+        }
     }
-    atomic::commit(&tmp, path)
 }
 
 /// draws one chart into `area`.
