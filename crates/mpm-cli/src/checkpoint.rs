@@ -20,14 +20,13 @@
 
 use std::path::Path;
 
+use mpm_scene::{RunoutMetrics, SavedState};
+use mpm_solver::EnergyCheck;
 use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
 use crate::output::atomic;
 use crate::output::csv::{EnergyRow, ProbeRow};
-use mpm_scene::RunoutMetrics;
-use mpm_scene::SavedState;
-use mpm_solver::EnergyCheck;
 
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
 /// carries the output time, the solver state the time step's reference densities; 3: the

@@ -3,9 +3,7 @@
 
 use std::path::PathBuf;
 
-use mpm_scene::SceneError;
-
-use mpm_scene::RunSummary;
+use mpm_scene::{RunSummary, SceneError};
 
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]

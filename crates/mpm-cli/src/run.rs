@@ -14,20 +14,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use mpm_grid::ShapeFunctions;
+use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
+use mpm_scene::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
+use mpm_scene::{GridBuilt, Scene, SceneError, ground_height, load_scene_str};
 use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::{self, CheckpointFile, History};
-use mpm_scene::SceneError;
-
 use crate::error::RunError;
 use crate::output::csv::{self, EnergyRow, ProbeRow};
 use crate::output::plots::{self, Chart, Series, Style};
 use crate::output::{atomic, vtk};
 use crate::progress::Progress;
-use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
-use mpm_scene::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
-use mpm_scene::{GridBuilt, Scene, ground_height, load_scene_str};
 
 /// How to run a scene.
 #[derive(Clone, Debug, Default)]
@@ -933,7 +931,7 @@ impl Driver<'_> {
             .iter()
             .filter(|g| g.x > lo && g.x < hi)
             .map(|g| (g.x, g.y))
-            .chain([lo, hi].map(|x| (x, mpm_scene::ground_height(&r.ground, x))))
+            .chain([lo, hi].map(|x| (x, ground_height(&r.ground, x))))
             .collect();
         ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
         let surface = summary::surface(&p.position, &r.ground, r.spacing, column);

@@ -6,12 +6,12 @@
 use std::fmt::Write;
 use std::path::Path;
 
+use mpm_scene::RunoutMetrics;
 use mpm_solver::EnergyLedger;
 use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
 use crate::output::atomic;
-use mpm_scene::RunoutMetrics;
 
 /// One row of `energy.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -22,11 +22,10 @@ use std::io::Write as _;
 use flate2::Compression;
 use flate2::write::ZlibEncoder;
 use mpm_constitutive::PlaneTensor;
-use mpm_solver::Particles;
-use rayon::prelude::*;
-
 use mpm_scene::SceneModel;
 use mpm_scene::file::{VtkField, VtkFormat};
+use mpm_solver::Particles;
+use rayon::prelude::*;
 
 /// uncompressed bytes per zlib block of the `compressed` format.
 pub(crate) const BLOCK: usize = 1 << 20;

@@ -230,21 +230,27 @@ fn finite2(v: [f64; 2]) -> bool {
     v[0].is_finite() && v[1].is_finite()
 }
 
+/// Refuses a corner with a non-finite coordinate at `path`.
+fn finite_corner(ctx: &Ctx<'_>, path: &str, v: [f64; 2]) -> Result<(), SceneError> {
+    if finite2(v) {
+        return Ok(());
+    }
+    Err(ctx.err(
+        path,
+        Some(pair(v)),
+        "corner is not finite",
+        "finite coordinates (m)",
+        "give the corner in metres",
+    ))
+}
+
 /// `shape = "rectangle"`: `min` and `max` corners.
 fn rectangle(ctx: &Ctx<'_>, base: &str, body: &BodySpec) -> Result<Shape, SceneError> {
     let p = |field: &str| format!("{base}.{field}");
     let min = body.min.ok_or_else(|| ctx.missing(&p("min"), "rectangle", "[0.0, 0.0]"))?;
     let max = body.max.ok_or_else(|| ctx.missing(&p("max"), "rectangle", "[1.0, 1.0]"))?;
     for (f, v) in [("min", min), ("max", max)] {
-        if !finite2(v) {
-            return Err(ctx.err(
-                &p(f),
-                Some(pair(v)),
-                "corner is not finite",
-                "finite coordinates (m)",
-                "give the corner in metres",
-            ));
-        }
+        finite_corner(ctx, &p(f), v)?;
     }
     if !(max[0] > min[0] && max[1] > min[1]) {
         return Err(ctx.err(
@@ -344,15 +350,7 @@ fn on_slope(
             ));
         }
         (Some(bs), None) => {
-            if !finite2(bs) {
-                return Err(ctx.err(
-                    &p("base_start"),
-                    Some(pair(bs)),
-                    "corner is not finite",
-                    "finite coordinates (m)",
-                    "give the corner in metres",
-                ));
-            }
+            finite_corner(ctx, &p("base_start"), bs)?;
             (Vector::new(bs[0], bs[1]), ground_of(bs[0]).map(|g| g.1))
         }
         (None, Some(x)) => {
