@@ -16,9 +16,13 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mpm_benches::SplitMix64;
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams, PlaneTensor,
-    Surface, SymTensor,
+    Branch, ConeMatch, ConstitutiveModel, DpBranch, DpState, DruckerPrager, DruckerPragerParams,
+    PlaneTensor, SymTensor,
 };
+
+/// The step duration passed to the updates: these models are rate-independent, so any Δt > 0
+/// gives the same bits.
+const DT: f64 = 1e-3;
 
 /// updates per benchmark iteration: enough to amortise the loop, few enough to stay in L1/L2.
 const POINTS: usize = 1024;
@@ -49,7 +53,7 @@ fn tensor(rng: &mut SplitMix64, scale: f64, plane: bool) -> SymTensor {
 
 /// seeded inputs whose update takes `surface`: compressed states (mean −1e3 .. −1e2 Pa) with a
 /// back stress, and increments of the kind each branch needs.
-fn inputs(m: &DruckerPrager, surface: Surface, seed: u64, plane: bool) -> Vec<Input> {
+fn inputs(m: &DruckerPrager, surface: Branch, seed: u64, plane: bool) -> Vec<Input> {
     let mut rng = SplitMix64::new(seed);
     let tensor = |rng: &mut SplitMix64, scale| tensor(rng, scale, plane);
     let mut out = Vec::with_capacity(POINTS);
@@ -62,16 +66,16 @@ fn inputs(m: &DruckerPrager, surface: Surface, seed: u64, plane: bool) -> Vec<In
         };
         let sigma = SymTensor::IDENTITY * p + tensor(&mut rng, 0.2 * p.abs()).deviator();
         let d_eps = match surface {
-            Surface::Elastic => tensor(&mut rng, 1e-6),
-            Surface::Cone => tensor(&mut rng, 2e-4).deviator(),
+            DpBranch::CONE => tensor(&mut rng, 2e-4).deviator(),
             // pulled apart: volumetric extension well beyond the tip.
-            Surface::Apex => {
+            DpBranch::APEX => {
                 let v = rng.uniform(2e-3, 5e-3);
                 SymTensor::new(v, v, v, 0.0, 0.0, 0.0) + tensor(&mut rng, 1e-4)
             }
+            _ => tensor(&mut rng, 1e-6),
         };
         let (mut s, mut st) = (sigma, state);
-        if m.update(&mut s, &mut st, &d_eps).map(|r| r.surface) == Ok(surface) {
+        if m.update(&mut s, &mut st, &d_eps, DT).map(|r| r.branch) == Ok(surface) {
             out.push((sigma, state, d_eps));
         }
     }
@@ -87,7 +91,7 @@ fn bench_dp_plane(
     name: &str,
     m: &DruckerPrager,
     input: &[Input],
-    surface: Surface,
+    surface: Branch,
 ) {
     let input: Vec<_> = input
         .iter()
@@ -96,7 +100,7 @@ fn bench_dp_plane(
         })
         .filter(|(s, st, d)| {
             let (mut s, mut st) = (*s, *st);
-            m.update_plane(&mut s, &mut st, d, Some(TURN)).map(|r| r.surface) == Ok(surface)
+            m.update_plane(&mut s, &mut st, d, DT, Some(TURN)).map(|r| r.branch) == Ok(surface)
         })
         .collect();
     assert!(input.len() >= POINTS / 2, "{name}: {} points keep their branch", input.len());
@@ -107,7 +111,7 @@ fn bench_dp_plane(
             let mut acc = 0.0;
             for (sigma, state, d_eps) in black_box(&input) {
                 let (mut s, mut st) = (*sigma, *state);
-                let rep = m.update_plane(&mut s, &mut st, d_eps, Some(TURN));
+                let rep = m.update_plane(&mut s, &mut st, d_eps, DT, Some(TURN));
                 acc += black_box(s).xx + rep.map_or(0.0, |r| r.delta_lambda);
             }
             acc
@@ -124,7 +128,7 @@ fn bench_dp(c: &mut Criterion, name: &str, m: &DruckerPrager, input: &[Input]) {
             let mut acc = 0.0;
             for (sigma, state, d_eps) in black_box(input) {
                 let (mut s, mut st) = (*sigma, *state);
-                let rep = m.update(&mut s, &mut st, d_eps);
+                let rep = m.update(&mut s, &mut st, d_eps, DT);
                 acc += black_box(s).xx + rep.map_or(0.0, |r| r.delta_lambda);
             }
             acc
@@ -148,7 +152,7 @@ fn constitutive(c: &mut Criterion) {
             let mut acc = 0.0;
             for (sigma, d_eps) in black_box(&el_input) {
                 let mut s = *sigma;
-                let _ = elastic.update(&mut s, &mut (), d_eps);
+                let _ = elastic.update(&mut s, &mut (), d_eps, DT);
                 acc += black_box(s).xx;
             }
             acc
@@ -156,13 +160,13 @@ fn constitutive(c: &mut Criterion) {
     });
     group.finish();
 
-    bench_dp(c, "dp_elastic", &m, &inputs(&m, Surface::Elastic, 0x6470_656c, false));
-    bench_dp(c, "dp_cone", &m, &inputs(&m, Surface::Cone, 0x636f_6e65, false));
-    bench_dp(c, "dp_apex", &m, &inputs(&m, Surface::Apex, 0x6170_6578, false));
-    let elastic_plane = inputs(&m, Surface::Elastic, 0x6470_656c, true);
-    bench_dp_plane(c, "dp_elastic_plane", &m, &elastic_plane, Surface::Elastic);
-    let cone_plane = inputs(&m, Surface::Cone, 0x636f_6e65, true);
-    bench_dp_plane(c, "dp_cone_plane", &m, &cone_plane, Surface::Cone);
+    bench_dp(c, "dp_elastic", &m, &inputs(&m, DpBranch::ELASTIC, 0x6470_656c, false));
+    bench_dp(c, "dp_cone", &m, &inputs(&m, DpBranch::CONE, 0x636f_6e65, false));
+    bench_dp(c, "dp_apex", &m, &inputs(&m, DpBranch::APEX, 0x6170_6578, false));
+    let elastic_plane = inputs(&m, DpBranch::ELASTIC, 0x6470_656c, true);
+    bench_dp_plane(c, "dp_elastic_plane", &m, &elastic_plane, DpBranch::ELASTIC);
+    let cone_plane = inputs(&m, DpBranch::CONE, 0x636f_6e65, true);
+    bench_dp_plane(c, "dp_cone_plane", &m, &cone_plane, DpBranch::CONE);
 
     // the paper's cohesionless, non-dilatant limit (c = 0, ψ = 0): the separating-sand apex.
     let loose = DruckerPrager::new(DruckerPragerParams {
@@ -172,7 +176,7 @@ fn constitutive(c: &mut Criterion) {
         ..*m.params()
     })
     .expect("valid parameters");
-    bench_dp(c, "dp_apex_c0_psi0", &loose, &inputs(&loose, Surface::Apex, 0x6c6f_6f73, false));
+    bench_dp(c, "dp_apex_c0_psi0", &loose, &inputs(&loose, DpBranch::APEX, 0x6c6f_6f73, false));
 }
 
 criterion_group!(benches, constitutive);

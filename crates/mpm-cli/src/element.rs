@@ -147,7 +147,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
                     s.zz,
                     s.xy,
                     p.eps_p_bar,
-                    p.surface.as_str()
+                    p.branch
                 ));
                 match o.test {
                     ElementTest::Uniaxial => a.push((-e.yy, -s.yy)),
@@ -163,10 +163,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
                 final_syy: last.stress.yy,
                 final_sxy: last.stress.xy,
                 final_eps_vol: last.strain.trace(),
-                first_yield_syy: path
-                    .iter()
-                    .find(|p| p.surface != mpm_constitutive::Surface::Elastic)
-                    .map(|p| p.stress.yy),
+                first_yield_syy: path.iter().find(|p| p.branch != "elastic").map(|p| p.stress.yy),
             });
             curves.push((label, a, b));
         }

@@ -17,7 +17,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 
 use mpm_constitutive::element_test::{
-    MixedControl, PathPoint, isotropic, run_mixed, simple_shear, uniaxial_plane_strain, write_csv,
+    MixedControl, PathPoint, QUASI_STATIC_STEP, isotropic, run_mixed, simple_shear,
+    uniaxial_plane_strain, write_csv,
 };
 use mpm_constitutive::{ConeMatch, DpState, DruckerPrager, DruckerPragerParams, SymTensor};
 
@@ -41,6 +42,7 @@ fn uniaxial_cycle(m: &DruckerPrager) -> Result<Vec<PathPoint<DpState>>, Box<dyn 
     let back = MixedControl {
         stress_controlled: [true, false, false, false, false, false],
         increment: [0.0, 4e-4 / 400.0, 0.0, 0.0, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
     };
     for mut p in run_mixed(m, top.stress, top.state, &back, 400)?.into_iter().skip(1) {
         p.step += top.step;

@@ -76,7 +76,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::elastic::LinearElastic;
 use crate::error::ConstitutiveError;
-use crate::model::{ConstitutiveModel, Surface, TangentModel, UpdateReport, check_finite};
+use crate::model::{Branch, ConstitutiveModel, TangentModel, UpdateReport, check_finite};
 use crate::tensor::{
     PlaneTensor, SymTensor, Symmetric, Tangent, deviatoric_projector, dyad, tangent_axpby,
 };
@@ -401,6 +401,11 @@ impl<V: DpVariables> DruckerPrager<V> {
         &self.params
     }
 
+    /// the elastic part (eq 10).
+    pub fn elasticity(&self) -> &LinearElastic {
+        &self.elastic
+    }
+
     /// friction coefficient `α` of eq 23.
     pub fn alpha(&self) -> f64 {
         self.alpha
@@ -601,24 +606,47 @@ impl<V: DpVariables> DruckerPrager<V> {
     }
 }
 
+/// The branches of the Drucker-Prager return mapping, in the order of its
+/// [`ConstitutiveModel::BRANCHES`] (`["elastic", "cone", "apex"]`).
+pub struct DpBranch;
+
+impl DpBranch {
+    /// the elastic trial state was admissible (`f_trial ≤ 0`): no plastic flow.
+    pub const ELASTIC: Branch = Branch::ELASTIC;
+    /// closed-form return to the smooth part of the cone.
+    pub const CONE: Branch = Branch::new(1);
+    /// return to the apex of the cone (the cone return would have overshot the tip).
+    pub const APEX: Branch = Branch::new(2);
+}
+
 impl<V: DpVariables> ConstitutiveModel for DruckerPrager<V> {
     type State = V;
     const IS_PLASTIC: bool = true;
+    const BRANCHES: &'static [&'static str] = &["elastic", "cone", "apex"];
 
     fn initial_state(&self) -> V {
         V::new(SymTensor::ZERO, self.k0, 0.0)
     }
 
-    fn elasticity(&self) -> &LinearElastic {
-        &self.elastic
+    /// the elastic part's (hardening changes no stiffness).
+    fn p_wave_modulus(&self, _state: &V) -> f64 {
+        self.elastic.p_wave_modulus()
     }
 
+    /// the elastic part's `½ σ : C⁻¹ : σ` (eq 10); the energy stored in the back stress counts
+    /// as plastic work (see [`UpdateReport::dissipation`]).
+    fn stored_energy_density(&self, sigma: &SymTensor, _state: &V) -> f64 {
+        self.elastic.strain_energy_density(sigma)
+    }
+
+    /// rate-independent: `dt` plays no part.
     #[inline(always)]
     fn update(
         &self,
         sigma: &mut SymTensor,
         state: &mut V,
         d_eps: &SymTensor,
+        _dt: f64,
     ) -> Result<UpdateReport, ConstitutiveError> {
         let back_stress = state.back_stress();
         self.update_in(sigma, *sigma, back_stress, state, d_eps)
@@ -634,6 +662,7 @@ impl<V: DpVariables> ConstitutiveModel for DruckerPrager<V> {
         sigma: &mut PlaneTensor,
         state: &mut V,
         d_eps: &PlaneTensor,
+        _dt: f64,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
         let full = state.back_stress();
@@ -705,7 +734,7 @@ impl<V: DpVariables> DruckerPrager<V> {
                 let work = dl * (self.alpha_g * i1 + q + 0.5 * inv_q * beta.ddot(&t.xi));
                 let st = V::new(beta.to_sym(), k, eps_n + dl);
                 let rep =
-                    UpdateReport { surface: Surface::Cone, delta_lambda: dl, dissipation: work };
+                    UpdateReport { branch: DpBranch::CONE, delta_lambda: dl, dissipation: work };
                 (s, st, rep)
             }
             Return::Apex { dl, i1, k } => {
@@ -716,7 +745,7 @@ impl<V: DpVariables> DruckerPrager<V> {
                 let work = i1 * (t.i1 - i1) * self.inv_9k + 0.5 * self.inv_b * beta.ddot(&t.xi);
                 let st = V::new(beta.to_sym(), k, eps_n + dl);
                 let rep =
-                    UpdateReport { surface: Surface::Apex, delta_lambda: dl, dissipation: work };
+                    UpdateReport { branch: DpBranch::APEX, delta_lambda: dl, dissipation: work };
                 (s, st, rep)
             }
         };
@@ -738,6 +767,7 @@ impl<V: DpVariables> TangentModel for DruckerPrager<V> {
         sigma: &SymTensor,
         state: &V,
         d_eps: &SymTensor,
+        _dt: f64,
     ) -> Result<Tangent, ConstitutiveError> {
         // the inherent method (inherent methods take precedence over trait methods).
         DruckerPrager::<V>::consistent_tangent(self, sigma, state, d_eps)

@@ -171,11 +171,16 @@ impl LinearElastic {
 impl ConstitutiveModel for LinearElastic {
     type State = ();
     const IS_PLASTIC: bool = false;
+    const BRANCHES: &'static [&'static str] = &["elastic"];
 
     fn initial_state(&self) -> Self::State {}
 
-    fn elasticity(&self) -> &LinearElastic {
-        self
+    fn p_wave_modulus(&self, _state: &Self::State) -> f64 {
+        LinearElastic::p_wave_modulus(self)
+    }
+
+    fn stored_energy_density(&self, sigma: &SymTensor, _state: &Self::State) -> f64 {
+        self.strain_energy_density(sigma)
     }
 
     #[inline]
@@ -184,6 +189,7 @@ impl ConstitutiveModel for LinearElastic {
         sigma: &mut SymTensor,
         _state: &mut Self::State,
         d_eps: &SymTensor,
+        _dt: f64,
     ) -> Result<UpdateReport, ConstitutiveError> {
         self.update_in(sigma, *sigma, d_eps)
     }
@@ -196,6 +202,7 @@ impl ConstitutiveModel for LinearElastic {
         sigma: &mut PlaneTensor,
         _state: &mut Self::State,
         d_eps: &PlaneTensor,
+        _dt: f64,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
         let start = match rotation {
@@ -221,6 +228,7 @@ impl TangentModel for LinearElastic {
         sigma: &SymTensor,
         _state: &Self::State,
         d_eps: &SymTensor,
+        _dt: f64,
     ) -> Result<Tangent, ConstitutiveError> {
         check_finite(sigma, d_eps)?;
         Ok(self.stiffness_matrix())
@@ -305,18 +313,18 @@ mod tests {
         let mut s = SymTensor::new(-10.0, -20.0, -5.0, 1.0, 0.0, 0.0);
         let e = SymTensor::plane(1e-5, -2e-5, 3e-6);
         let expect = s + m.stress_increment(&e);
-        let r = m.update(&mut s, &mut (), &e).unwrap();
+        let r = m.update(&mut s, &mut (), &e, 1.0).unwrap();
         assert_eq!(r, UpdateReport::ELASTIC);
         assert_eq!(s, expect);
         let before = s;
         let bad = SymTensor::plane(f64::NAN, 0.0, 0.0);
         assert!(matches!(
-            m.update(&mut s, &mut (), &bad),
+            m.update(&mut s, &mut (), &bad, 1.0),
             Err(ConstitutiveError::NonFiniteStrainIncrement { component: "xx", value }) if value.is_nan()
         ));
         assert_eq!(s, before);
         let huge = SymTensor::plane(f64::MAX, 0.0, 0.0);
-        assert!(m.update(&mut s, &mut (), &huge).is_err());
+        assert!(m.update(&mut s, &mut (), &huge, 1.0).is_err());
         assert_eq!(s, before);
     }
 }

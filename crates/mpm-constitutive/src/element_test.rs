@@ -21,7 +21,6 @@
 use std::io::Write;
 
 use crate::error::ConstitutiveError;
-use crate::model::Surface;
 pub use crate::model::TangentModel;
 use crate::tensor::{SymTensor, Tangent};
 
@@ -43,7 +42,15 @@ pub struct MixedControl {
     /// per-step increment in storage order: a tensor strain increment where strain controlled,
     /// a stress increment (Pa) where stress controlled.
     pub increment: [f64; 6],
+    /// the duration of one step (s): a rate-dependent model sees the strain rate `Δε/dt`;
+    /// rate-independent models ignore it. [`QUASI_STATIC_STEP`] for a slow test.
+    pub dt: f64,
 }
+
+/// The duration of one step of the convenience drivers ([`uniaxial_plane_strain`],
+/// [`simple_shear`], [`isotropic`]): 1 s, so that strain increments of a test (≤ 1e-2) are slow
+/// loading. A rate-dependent model is driven at a chosen rate through [`run_mixed`].
+pub const QUASI_STATIC_STEP: f64 = 1.0;
 
 /// One point of an element-test path.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,8 +65,9 @@ pub struct PathPoint<S> {
     pub state: S,
     /// equivalent plastic strain `ε̄ᵖ`.
     pub eps_p_bar: f64,
-    /// return-mapping branch of the step.
-    pub surface: Surface,
+    /// the name of the branch the step's update took (the model's
+    /// [`BRANCHES`](crate::ConstitutiveModel::BRANCHES) entry).
+    pub branch: &'static str,
     /// plastic multiplier of the step.
     pub delta_lambda: f64,
     /// plastic work `σ : Δεᵖ` of the step (J/m³).
@@ -92,6 +100,14 @@ pub fn run_mixed<M: TangentModel>(
             range: "finite components",
         });
     }
+    if !(control.dt.is_finite() && control.dt > 0.0) {
+        return Err(ConstitutiveError::InvalidParameter {
+            name: "dt",
+            value: control.dt,
+            range: "finite and > 0",
+        });
+    }
+    let dt = control.dt;
     let ctrl: Vec<usize> = (0..6).filter(|&i| control.stress_controlled[i]).collect();
     let s0 = sigma0.to_array();
     let mut points = Vec::with_capacity(n_steps + 1);
@@ -101,7 +117,7 @@ pub fn run_mixed<M: TangentModel>(
         stress: sigma0,
         state: state0,
         eps_p_bar: model.equivalent_plastic_strain(&state0),
-        surface: Surface::Elastic,
+        branch: M::BRANCHES[0],
         delta_lambda: 0.0,
         dissipation: 0.0,
         iterations: 0,
@@ -124,7 +140,7 @@ pub fn run_mixed<M: TangentModel>(
         let eval = |x: &[f64; 6]| -> Result<(SymTensor, M::State, _, f64, f64), _> {
             let d_eps = build(x);
             let (mut s, mut st) = (sigma, state);
-            let rep = model.update(&mut s, &mut st, &d_eps)?;
+            let rep = model.update(&mut s, &mut st, &d_eps, dt)?;
             let sa = s.to_array();
             let mut scale = max_abs(&sigma.to_array()).max(max_abs(&sa));
             let mut res = 0.0f64;
@@ -147,7 +163,7 @@ pub fn run_mixed<M: TangentModel>(
                 });
             }
             iterations += 1;
-            let t = model.consistent_tangent(&sigma, &state, &build(&x))?;
+            let t = model.consistent_tangent(&sigma, &state, &build(&x), dt)?;
             let sa = cur.0.to_array();
             let dx = solve_block(&t, &ctrl, |i| target[i] - sa[i])
                 .ok_or(ConstitutiveError::SingularTangent { step })?;
@@ -191,7 +207,7 @@ pub fn run_mixed<M: TangentModel>(
             stress: sigma,
             state,
             eps_p_bar: model.equivalent_plastic_strain(&state),
-            surface: rep.surface,
+            branch: M::BRANCHES.get(rep.branch.index()).copied().unwrap_or("unnamed"),
             delta_lambda: rep.delta_lambda,
             dissipation: rep.dissipation,
             iterations,
@@ -213,6 +229,7 @@ pub fn uniaxial_plane_strain<M: TangentModel>(
     let control = MixedControl {
         stress_controlled: [true, false, false, false, false, false],
         increment: [0.0, eps_yy_end / n, 0.0, 0.0, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
     };
     run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
 }
@@ -230,6 +247,7 @@ pub fn simple_shear<M: TangentModel>(
     let control = MixedControl {
         stress_controlled: [false, true, false, false, false, false],
         increment: [0.0, 0.0, 0.0, 0.5 * gamma_end / n, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
     };
     run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
 }
@@ -243,8 +261,11 @@ pub fn isotropic<M: TangentModel>(
     n_steps: usize,
 ) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
     let d = eps_v_end / (3.0 * n_steps.max(1) as f64);
-    let control =
-        MixedControl { stress_controlled: [false; 6], increment: [d, d, d, 0.0, 0.0, 0.0] };
+    let control = MixedControl {
+        stress_controlled: [false; 6],
+        increment: [d, d, d, 0.0, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
+    };
     run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
 }
 
@@ -285,7 +306,7 @@ pub fn write_csv<W: Write, S>(
             s.mean(),
             s.j2().sqrt(),
             p.eps_p_bar,
-            p.surface.as_str(),
+            p.branch,
             p.delta_lambda,
             p.dissipation,
         )?;
@@ -368,7 +389,11 @@ mod tests {
     #[test]
     fn stress_controlled_isotropic_path_hits_targets() {
         let m = LinearElastic::from_young_poisson(1.0e7, 0.25).unwrap();
-        let control = MixedControl { stress_controlled: [true; 6], increment: [-100.0; 6] };
+        let control = MixedControl {
+            stress_controlled: [true; 6],
+            increment: [-100.0; 6],
+            dt: QUASI_STATIC_STEP,
+        };
         let path = run_mixed(&m, SymTensor::ZERO, (), &control, 5).unwrap();
         let last = path.last().unwrap();
         for (s, target) in last.stress.to_array().into_iter().zip([-500.0; 6]) {

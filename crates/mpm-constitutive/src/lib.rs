@@ -1,5 +1,6 @@
-//! Small-strain constitutive models for geomaterials: linear elasticity and Drucker-Prager with
-//! non-associated flow and Prager mixed hardening, integrated one strain increment at a time.
+//! Small-strain constitutive models for geomaterials: linear elasticity, Drucker-Prager with
+//! non-associated flow and Prager mixed hardening, and the μ(I) rheology of dense granular flow,
+//! integrated one strain increment at a time.
 //!
 //! This crate implements §6 of Abe, Johansson & Konagai (2005), "Dry sand flow analysis with
 //! MPM" (eq 10–11: elastic increment; eqs 23–25: Drucker-Prager yield function, plastic potential
@@ -24,16 +25,18 @@
 //! - [`tensor`]: [`SymTensor`], the 6×6 [`Tangent`] convention, [`PlaneTensor`] and
 //!   [`Symmetric`], the arithmetic the return mappings are written against once for both.
 //! - [`elastic`]: [`LinearElastic`] (eq 10), wave speeds for the time step (eq 13).
-//! - [`model`]: the [`ConstitutiveModel`] trait a solver uses, [`UpdateReport`], [`Surface`],
+//! - [`model`]: the [`ConstitutiveModel`] trait a solver uses, [`UpdateReport`], [`Branch`],
 //!   and [`TangentModel`].
 //! - [`drucker_prager`]: [`DruckerPrager`] (eqs 23–25) with the cone/apex return mapping and
 //!   its consistent tangent.
+//! - [`mu_i`]: [`MuI`], the μ(I) rheology of dense granular flow (Jop, Forterre & Pouliquen
+//!   2006) as an elasto-viscoplastic, rate-dependent model that separates in tension.
 //! - [`element_test`]: single-point drivers with mixed stress/strain control (§6(3)).
 //!
 //! # Example: a plane-strain uniaxial compression test
 //! ```
 //! use mpm_constitutive::element_test::uniaxial_plane_strain;
-//! use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, Surface, SymTensor};
+//! use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor};
 //!
 //! let sand = DruckerPrager::new(DruckerPragerParams {
 //!     young: 2.0e6,
@@ -47,7 +50,7 @@
 //! })?;
 //! // compress to ε_yy = −1e-3 in 400 steps with σ_xx = 0 and ε_zz = 0.
 //! let path = uniaxial_plane_strain(&sand, SymTensor::ZERO, -1.0e-3, 400)?;
-//! let first_yield = path.iter().find(|p| p.surface == Surface::Cone).unwrap();
+//! let first_yield = path.iter().find(|p| p.branch == "cone").unwrap();
 //! let last = path.last().unwrap();
 //! assert!(first_yield.stress.yy < -28.0 && first_yield.stress.yy > -29.5);
 //! // perfectly plastic, non-dilatant: the steady state of the paper's element test.
@@ -62,12 +65,14 @@ pub mod elastic;
 pub mod element_test;
 pub mod error;
 pub mod model;
+pub mod mu_i;
 pub mod tensor;
 
 pub use drucker_prager::{
-    ConeMatch, DpPerfectState, DpState, DpVariables, DruckerPrager, DruckerPragerParams,
+    ConeMatch, DpBranch, DpPerfectState, DpState, DpVariables, DruckerPrager, DruckerPragerParams,
 };
 pub use elastic::LinearElastic;
 pub use error::ConstitutiveError;
-pub use model::{ConstitutiveModel, Surface, TangentModel, UpdateReport};
+pub use model::{Branch, ConstitutiveModel, MAX_BRANCHES, TangentModel, UpdateReport};
+pub use mu_i::{MuI, MuIBranch, MuIParams, MuIState};
 pub use tensor::{PlaneTensor, SymTensor, Symmetric, Tangent};

@@ -11,29 +11,33 @@
 
 use glam::DMat3;
 
-use crate::elastic::LinearElastic;
 use crate::error::ConstitutiveError;
 use crate::tensor::{PlaneTensor, SymTensor, Tangent};
 
-/// Which branch the return mapping took.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Surface {
-    /// the elastic trial state was admissible (`f_trial ≤ 0`): no plastic flow.
-    Elastic,
-    /// closed-form return to the smooth part of the cone.
-    Cone,
-    /// return to the apex of the cone (the cone return would have overshot the tip).
-    Apex,
-}
+/// The most branches a model may name in [`ConstitutiveModel::BRANCHES`] (so that a solver can
+/// count them in a fixed array, without allocating per step).
+pub const MAX_BRANCHES: usize = 8;
 
-impl Surface {
-    /// lowercase name used in CSV output.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Elastic => "elastic",
-            Self::Cone => "cone",
-            Self::Apex => "apex",
-        }
+/// Which branch an update took: an index into the model's [`ConstitutiveModel::BRANCHES`], whose
+/// entry 0 is the elastic branch. A solver counts branches by this index and prints them by the
+/// model's names, so it needs no model's vocabulary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct Branch(u8);
+
+impl Branch {
+    /// the elastic branch (no plastic flow), index 0 of every model.
+    pub const ELASTIC: Self = Self(0);
+
+    /// branch `index` of a model; below [`MAX_BRANCHES`] (checked where a constant is built).
+    pub const fn new(index: u8) -> Self {
+        assert!((index as usize) < MAX_BRANCHES, "a model names at most MAX_BRANCHES branches");
+        Self(index)
+    }
+
+    /// the index into [`ConstitutiveModel::BRANCHES`], below [`MAX_BRANCHES`].
+    #[inline(always)]
+    pub const fn index(self) -> usize {
+        self.0 as usize
     }
 }
 
@@ -41,7 +45,7 @@ impl Surface {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UpdateReport {
     /// the branch taken.
-    pub surface: Surface,
+    pub branch: Branch,
     /// the plastic multiplier `Δλ ≥ 0` (the increment of `ε̄ᵖ`; 0 when elastic).
     pub delta_lambda: f64,
     /// plastic dissipation `σ : Δεᵖ` of the increment per unit volume (J/m³), evaluated with the
@@ -52,11 +56,15 @@ pub struct UpdateReport {
 
 impl UpdateReport {
     /// the report of an elastic step.
-    pub const ELASTIC: Self =
-        Self { surface: Surface::Elastic, delta_lambda: 0.0, dissipation: 0.0 };
+    pub const ELASTIC: Self = Self { branch: Branch::ELASTIC, delta_lambda: 0.0, dissipation: 0.0 };
 }
 
-/// A rate-independent small-strain model integrated one strain increment at a time.
+/// A small-strain model integrated one strain increment (over a time step `Δt`) at a time.
+///
+/// Rate-independent models ignore `Δt`; rate-dependent ones (viscoplasticity, μ(I) rheology)
+/// take the strain rate as `Δε/Δt`. What a solver needs besides the update is asked of the model,
+/// never assumed: its current wave speed (through [`p_wave_modulus`](Self::p_wave_modulus)) for
+/// the time step, its stored elastic energy for the energy ledger, and the names of its branches.
 pub trait ConstitutiveModel: Send + Sync {
     /// Internal variables per material point; `()` for elasticity.
     type State: Copy
@@ -73,14 +81,27 @@ pub trait ConstitutiveModel: Send + Sync {
     /// work for elastic scenes).
     const IS_PLASTIC: bool;
 
+    /// the names of the branches an update can take, indexed by [`Branch::index`]: entry 0 is
+    /// `"elastic"`; at most [`MAX_BRANCHES`]. Lowercase, used as CSV values.
+    const BRANCHES: &'static [&'static str];
+
+    /// true when [`p_wave_modulus`](Self::p_wave_modulus) depends on the state; `false` lets a
+    /// solver ask once per material (at the initial state) instead of once per particle.
+    const WAVE_SPEED_VARIES: bool = false;
+
     /// the internal variables of a virgin material point.
     fn initial_state(&self) -> Self::State;
 
-    /// the elastic part of the model (for wave speeds, time steps and elastic energy).
-    fn elasticity(&self) -> &LinearElastic;
+    /// the constrained (P-wave) modulus `M = ρ c²` of the material at `state` (Pa): the
+    /// stiffness of the fastest wave, `c = √(M/ρ)`, that the time step (eq 13) must resolve.
+    fn p_wave_modulus(&self, state: &Self::State) -> f64;
 
-    /// Integrates the strain increment `d_eps` (tensor strain, tension positive): updates `sigma`
-    /// and `state` in place.
+    /// the elastic energy stored per unit volume at stress `sigma` and `state` (J/m³), for the
+    /// energy ledger.
+    fn stored_energy_density(&self, sigma: &SymTensor, state: &Self::State) -> f64;
+
+    /// Integrates the strain increment `d_eps` (tensor strain, tension positive) applied over the
+    /// time `dt > 0` (s): updates `sigma` and `state` in place.
     ///
     /// Returns `Err` (leaving `sigma` and `state` untouched) if `d_eps`, `sigma` or the state is
     /// not finite.
@@ -89,6 +110,7 @@ pub trait ConstitutiveModel: Send + Sync {
         sigma: &mut SymTensor,
         state: &mut Self::State,
         d_eps: &SymTensor,
+        dt: f64,
     ) -> Result<UpdateReport, ConstitutiveError>;
 
     /// [`update`](Self::update) in plane strain, after turning `sigma` and the state by
@@ -108,6 +130,7 @@ pub trait ConstitutiveModel: Send + Sync {
         sigma: &mut PlaneTensor,
         state: &mut Self::State,
         d_eps: &PlaneTensor,
+        dt: f64,
         rotation: Option<(f64, f64)>,
     ) -> Result<UpdateReport, ConstitutiveError> {
         let (mut full, mut st) = (sigma.to_sym(), *state);
@@ -115,7 +138,7 @@ pub trait ConstitutiveModel: Send + Sync {
             full = full.rotated_z(c, s);
             self.rotate_state_z(&mut st, c, s);
         }
-        let report = self.update(&mut full, &mut st, &d_eps.to_sym())?;
+        let report = self.update(&mut full, &mut st, &d_eps.to_sym(), dt)?;
         for (name, value) in [("stress.yz", full.yz), ("stress.zx", full.zx)] {
             if value != 0.0 {
                 return Err(ConstitutiveError::OutOfPlane { name, value });
@@ -149,14 +172,15 @@ pub trait ConstitutiveModel: Send + Sync {
 /// A model that also provides its algorithmic (consistent) tangent, as needed by implicit solvers
 /// and by the mixed-control element tests of [`crate::element_test`].
 pub trait TangentModel: ConstitutiveModel {
-    /// `dσ_{n+1}/dΔε` of [`ConstitutiveModel::update`] at the start state (`sigma`, `state`) and
-    /// increment `d_eps`, as a [`Tangent`] (storage order `[xx, yy, zz, xy, yz, zx]`, acting on
-    /// tensor strain components).
+    /// `dσ_{n+1}/dΔε` of [`ConstitutiveModel::update`] at the start state (`sigma`, `state`),
+    /// increment `d_eps` and time step `dt`, as a [`Tangent`] (storage order
+    /// `[xx, yy, zz, xy, yz, zx]`, acting on tensor strain components).
     fn consistent_tangent(
         &self,
         sigma: &SymTensor,
         state: &Self::State,
         d_eps: &SymTensor,
+        dt: f64,
     ) -> Result<Tangent, ConstitutiveError>;
 }
 

@@ -8,11 +8,15 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveError, ConstitutiveModel, DpPerfectState, DpState, DruckerPrager,
-    DruckerPragerParams, LinearElastic, PlaneTensor, Surface, SymTensor, UpdateReport,
+    ConeMatch, ConstitutiveError, ConstitutiveModel, DpBranch, DpPerfectState, DpState,
+    DruckerPrager, DruckerPragerParams, LinearElastic, PlaneTensor, SymTensor, UpdateReport,
 };
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
+
+/// The step duration passed to the updates: these models are rate-independent, so any Δt > 0
+/// gives the same bits.
+const DT: f64 = 1e-3;
 
 /// the SPEC's consistency bound after a plastic step: |f| ≤ 1e-10 (|k| + |I1| + 1).
 const YIELD_TOL: f64 = 1e-10;
@@ -147,7 +151,7 @@ fn run(
     d: &SymTensor,
 ) -> Option<(SymTensor, DpState, UpdateReport)> {
     let (mut s, mut st) = (sigma, state);
-    match m.update(&mut s, &mut st, d) {
+    match m.update(&mut s, &mut st, d, DT) {
         Ok(rep) => Some((s, st, rep)),
         Err(ConstitutiveError::EmptyElasticDomain { .. }) if m.alpha() == 0.0 => None,
         Err(e) => panic!("unexpected error {e} for {sigma:?} {state:?} {d:?}"),
@@ -164,22 +168,22 @@ proptest! {
         let scale = stress_scale(&m, &sigma, &state, &d);
         let Some((s, st, rep)) = run(&m, sigma, state, &d) else { return Ok(()); };
         if f_trial < -BRANCH_MARGIN * scale {
-            prop_assert_eq!(rep.surface, Surface::Elastic);
+            prop_assert_eq!(rep.branch, DpBranch::ELASTIC);
             prop_assert_eq!(st, state);
             prop_assert!((s - trial).norm() <= BRANCH_MARGIN * scale);
             prop_assert_eq!(rep.delta_lambda, 0.0);
         } else if f_trial > BRANCH_MARGIN * scale {
-            prop_assert_ne!(rep.surface, Surface::Elastic);
+            prop_assert_ne!(rep.branch, DpBranch::ELASTIC);
         }
     }
 
     #[test]
     fn plastic_step_lands_on_the_yield_surface((m, sigma, state, d) in case()) {
         let Some((s, st, rep)) = run(&m, sigma, state, &d) else { return Ok(()); };
-        if rep.surface != Surface::Elastic {
+        if rep.branch != DpBranch::ELASTIC {
             let f = m.yield_function(&s, &st);
             let bound = YIELD_TOL * (st.k.abs() + s.trace().abs() + 1.0);
-            prop_assert!(f.abs() <= bound, "f = {f:e} > {bound:e} on {:?}", rep.surface);
+            prop_assert!(f.abs() <= bound, "f = {f:e} > {bound:e} on {:?}", rep.branch);
         }
     }
 
@@ -193,20 +197,21 @@ proptest! {
         // strain scale of the trial stress; rounding of the stress differences is ~1e-16 of it.
         let tol = FLOW_TOL * (trial.norm() + s.norm() + 1.0) / el.shear_modulus();
         let dl = rep.delta_lambda;
-        match rep.surface {
-            Surface::Elastic => prop_assert!(d_eps_p.norm() <= tol),
+        match rep.branch {
+            DpBranch::ELASTIC => prop_assert!(d_eps_p.norm() <= tol),
             // eq 25: Δεᵖ = Δλ (αg I + n̂/√2), n̂ the trial relative deviator direction (radial
             // return; taken from the trial because a cone of size 0 returns to ξ = 0).
-            Surface::Cone => {
+            DpBranch::CONE => {
                 let g = m.flow_direction(&trial, &state);
                 prop_assert!((d_eps_p - g * dl).norm() <= tol, "{:?} vs {:?}", d_eps_p, g * dl);
             }
             // apex: the multiplier is the equivalent plastic shear strain √2 ‖dev Δεᵖ‖, and the
             // volumetric part is at least the flow rule's 3αg Δλ.
-            Surface::Apex => {
+            DpBranch::APEX => {
                 prop_assert!((SQRT_2 * d_eps_p.deviator().norm() - dl).abs() <= tol);
                 prop_assert!(d_eps_p.trace() >= 3.0 * m.alpha_g() * dl - tol);
             }
+            other => prop_assert!(false, "Drucker-Prager names no branch {:?}", other),
         }
         // plastic work as reported.
         let work = s.ddot(&d_eps_p);
@@ -295,7 +300,7 @@ proptest! {
         let lean = DpPerfectState { eps_p_bar };
         let bits = |t: SymTensor| t.to_array().map(f64::to_bits);
         let (mut s1, mut st1, mut s2, mut st2) = (sigma, full, sigma, lean);
-        let (r1, r2) = (hardening.update(&mut s1, &mut st1, &d), perfect.update(&mut s2, &mut st2, &d));
+        let (r1, r2) = (hardening.update(&mut s1, &mut st1, &d, DT), perfect.update(&mut s2, &mut st2, &d, DT));
         prop_assert_eq!(r1.map_err(|e| e.to_string()), r2.map_err(|e| e.to_string()));
         prop_assert_eq!(bits(s1), bits(s2));
         prop_assert_eq!(st1.eps_p_bar.to_bits(), st2.eps_p_bar.to_bits());
@@ -304,8 +309,8 @@ proptest! {
         let rotation = theta.map(|t: f64| (t.cos(), t.sin()));
         let (sigma, d) = (PlaneTensor::from_sym(&sigma), PlaneTensor::new(d.xx, d.yy, 0.0, d.xy));
         let (mut s1, mut st1, mut s2, mut st2) = (sigma, full, sigma, lean);
-        let r1 = hardening.update_plane(&mut s1, &mut st1, &d, rotation);
-        let r2 = perfect.update_plane(&mut s2, &mut st2, &d, rotation);
+        let r1 = hardening.update_plane(&mut s1, &mut st1, &d, DT, rotation);
+        let r2 = perfect.update_plane(&mut s2, &mut st2, &d, DT, rotation);
         prop_assert_eq!(r1.map_err(|e| e.to_string()), r2.map_err(|e| e.to_string()));
         prop_assert_eq!(bits(s1.to_sym()), bits(s2.to_sym()));
         prop_assert_eq!(st1.eps_p_bar.to_bits(), st2.eps_p_bar.to_bits());
@@ -315,7 +320,7 @@ proptest! {
     #[test]
     fn outputs_are_finite((m, sigma, state, d) in case()) {
         let (mut s, mut st) = (sigma, state);
-        match m.update(&mut s, &mut st, &d) {
+        match m.update(&mut s, &mut st, &d, DT) {
             Ok(rep) => {
                 prop_assert!(s.is_finite() && st.back_stress.is_finite());
                 prop_assert!(st.k.is_finite() && st.eps_p_bar.is_finite());
@@ -361,14 +366,14 @@ proptest! {
                 return Ok(());
             };
             // a kink of the return (branch switch) within ±h: no derivative to compare.
-            prop_assume!(rp.surface == rep0.surface && rm.surface == rep0.surface);
+            prop_assume!(rp.branch == rep0.branch && rm.branch == rep0.branch);
             let fd = (sp - sm) * (0.5 / h);
             for (i, fd_i) in fd.to_array().into_iter().enumerate() {
                 prop_assert!(
                     (fd_i - tangent[i][j]).abs() <= FD_TOL * c_norm,
                     "T[{i}][{j}] = {:e}, FD {fd_i:e}, {:?}",
                     tangent[i][j],
-                    rep0.surface
+                    rep0.branch
                 );
             }
         }
@@ -391,17 +396,22 @@ impl DefaultPlane {
 impl ConstitutiveModel for DefaultPlane {
     type State = ();
     const IS_PLASTIC: bool = false;
+    const BRANCHES: &'static [&'static str] = &["elastic"];
     fn initial_state(&self) {}
-    fn elasticity(&self) -> &LinearElastic {
-        &self.elastic
+    fn p_wave_modulus(&self, _state: &()) -> f64 {
+        self.elastic.p_wave_modulus()
+    }
+    fn stored_energy_density(&self, sigma: &SymTensor, _state: &()) -> f64 {
+        self.elastic.strain_energy_density(sigma)
     }
     fn update(
         &self,
         sigma: &mut SymTensor,
         state: &mut (),
         d_eps: &SymTensor,
+        dt: f64,
     ) -> Result<UpdateReport, ConstitutiveError> {
-        let report = self.elastic.update(sigma, state, d_eps)?;
+        let report = self.elastic.update(sigma, state, d_eps, dt)?;
         sigma.yz += self.twist;
         Ok(report)
     }
@@ -425,17 +435,18 @@ fn plane_update_refuses_what_it_cannot_carry() {
         (sigma0, PlaneTensor::new(f64::MAX, f64::MAX, 0.0, 0.0)),
     ];
     for (s0, d) in cases {
-        let full = elastic.update(&mut s0.to_sym(), &mut (), &d.to_sym()).unwrap_err();
+        let full = elastic.update(&mut s0.to_sym(), &mut (), &d.to_sym(), DT).unwrap_err();
         for rotation in [None, Some((0.6, 0.8))] {
             let mut s = s0;
-            let e = elastic.update_plane(&mut s, &mut (), &d, rotation).unwrap_err();
+            let e = elastic.update_plane(&mut s, &mut (), &d, DT, rotation).unwrap_err();
             assert_eq!(
                 s.to_sym().to_array().map(f64::to_bits),
                 s0.to_sym().to_array().map(f64::to_bits)
             );
             let mut s = s0;
-            let e_default =
-                DefaultPlane::new(elastic).update_plane(&mut s, &mut (), &d, rotation).unwrap_err();
+            let e_default = DefaultPlane::new(elastic)
+                .update_plane(&mut s, &mut (), &d, DT, rotation)
+                .unwrap_err();
             assert_eq!(
                 s.to_sym().to_array().map(f64::to_bits),
                 s0.to_sym().to_array().map(f64::to_bits)
@@ -450,7 +461,7 @@ fn plane_update_refuses_what_it_cannot_carry() {
     let mut s = sigma0;
     let d = PlaneTensor::new(1e-5, 0.0, 0.0, 0.0);
     let twisting = DefaultPlane { elastic, twist: 1.0 };
-    let e = twisting.update_plane(&mut s, &mut (), &d, None).unwrap_err();
+    let e = twisting.update_plane(&mut s, &mut (), &d, DT, None).unwrap_err();
     assert_eq!(e, ConstitutiveError::OutOfPlane { name: "stress.yz", value: 1.0 });
     assert_eq!(s, sigma0);
 }
@@ -469,9 +480,9 @@ fn same_bits<M: ConstitutiveModel>(
         full = full.rotated_z(c, s);
         m.rotate_state_z(&mut full_state, c, s);
     }
-    let expected = m.update(&mut full, &mut full_state, &d.to_sym());
+    let expected = m.update(&mut full, &mut full_state, &d.to_sym(), DT);
     let (mut plane, mut plane_state) = (sigma, state);
-    let got = m.update_plane(&mut plane, &mut plane_state, &d, rotation);
+    let got = m.update_plane(&mut plane, &mut plane_state, &d, DT, rotation);
     match (expected, got) {
         (Ok(a), Ok(b)) => {
             prop_assert_eq!(a, b);
@@ -529,8 +540,8 @@ fn perfect_state_cases_cover_every_branch_and_refuse_alike() {
         let p = DruckerPragerParams { hardening_modulus: 0.0, ..*m.params() };
         let perfect = DruckerPrager::perfectly_plastic(p).unwrap();
         let (mut s, mut st) = (sigma, DpPerfectState { eps_p_bar: state.eps_p_bar });
-        if let Ok(rep) = perfect.update(&mut s, &mut st, &d) {
-            counts[rep.surface as usize] += 1;
+        if let Ok(rep) = perfect.update(&mut s, &mut st, &d, DT) {
+            counts[rep.branch.index()] += 1;
         }
     }
     assert!(counts.iter().all(|&c| c >= 100), "elastic/cone/apex counts {counts:?}");
@@ -549,8 +560,8 @@ fn perfect_state_cases_cover_every_branch_and_refuse_alike() {
     ] {
         let (mut s1, mut st1) = (s, DpState { eps_p_bar: eps, ..full });
         let (mut s2, mut st2) = (s, DpPerfectState { eps_p_bar: eps });
-        let e1 = hardening.update(&mut s1, &mut st1, &d).unwrap_err();
-        let e2 = perfect.update(&mut s2, &mut st2, &d).unwrap_err();
+        let e1 = hardening.update(&mut s1, &mut st1, &d, DT).unwrap_err();
+        let e2 = perfect.update(&mut s2, &mut st2, &d, DT).unwrap_err();
         assert_eq!(e1.to_string(), e2.to_string());
         assert_eq!(st2.eps_p_bar.to_bits(), eps.to_bits(), "the state is left untouched");
     }
@@ -565,8 +576,8 @@ fn generated_cases_cover_every_branch() {
     let mut counts = [0usize; 3];
     for _ in 0..2000 {
         let (m, mut s, mut st, d) = case().new_tree(&mut runner).unwrap().current();
-        if let Ok(rep) = m.update(&mut s, &mut st, &d) {
-            counts[rep.surface as usize] += 1;
+        if let Ok(rep) = m.update(&mut s, &mut st, &d, DT) {
+            counts[rep.branch.index()] += 1;
         }
     }
     assert!(counts.iter().all(|&c| c >= 100), "elastic/cone/apex counts {counts:?}");

@@ -4,12 +4,17 @@
 //! Conventions: tension positive, SI units, tensor shear strain (`γ = 2 ε_xy`).
 
 use mpm_constitutive::element_test::{
-    MixedControl, PathPoint, isotropic, run_mixed, simple_shear, uniaxial_plane_strain,
+    MixedControl, PathPoint, QUASI_STATIC_STEP, isotropic, run_mixed, simple_shear,
+    uniaxial_plane_strain,
 };
 use mpm_constitutive::{
-    ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
-    LinearElastic, PlaneTensor, Surface, SymTensor,
+    Branch, ConeMatch, ConstitutiveError, ConstitutiveModel, DpBranch, DpState, DruckerPrager,
+    DruckerPragerParams, LinearElastic, PlaneTensor, SymTensor,
 };
+
+/// The step duration passed to the updates: these models are rate-independent, so any Δt > 0
+/// gives the same bits.
+const DT: f64 = 1e-3;
 
 /// the acceptance tolerance on the paper's quoted numbers (0.1 %).
 const PAPER_REL: f64 = 1e-3;
@@ -55,9 +60,9 @@ mod abe2005_element_tests {
             assert!(rel_err(closed, -28.50) <= PAPER_REL, "closed form {closed}");
             // 2e-9 strain per step = 4.4e-3 Pa per step, 0.015 % of the yield stress.
             let path = uniaxial_plane_strain(&m, SymTensor::ZERO, -2.0e-5, 10_000).unwrap();
-            let i = path.iter().position(|p| p.surface != Surface::Elastic).unwrap();
+            let i = path.iter().position(|p| p.branch != "elastic").unwrap();
             let (before, after) = (&path[i - 1], &path[i]);
-            assert_eq!(after.surface, Surface::Cone);
+            assert_eq!(after.branch, "cone");
             for p in [before, after] {
                 assert!(rel_err(p.stress.yy, -28.50) <= PAPER_REL, "ψ = {psi}: {:?}", p.stress);
             }
@@ -115,8 +120,7 @@ mod abe2005_element_tests {
     fn abe2005_simple_shear_elastic_slope_is_g() {
         let (m, path) = sheared(0.0);
         let g = m.elasticity().shear_modulus();
-        let elastic: Vec<_> =
-            path.iter().skip(1).take_while(|p| p.surface == Surface::Elastic).collect();
+        let elastic: Vec<_> = path.iter().skip(1).take_while(|p| p.branch == "elastic").collect();
         assert!(elastic.len() >= 5, "{} elastic points", elastic.len());
         for p in elastic {
             let slope = p.stress.xy / (2.0 * p.strain.xy);
@@ -124,7 +128,7 @@ mod abe2005_element_tests {
             // no coupling in the elastic range: σ_yy held, normal strains unchanged.
             assert!((p.stress.yy + 100.0).abs() <= NEWTON_REL * 100.0);
         }
-        assert!(path.iter().any(|p| p.surface == Surface::Cone));
+        assert!(path.iter().any(|p| p.branch == "cone"));
         // σ_yy is held throughout.
         assert!(path.iter().all(|p| (p.stress.yy + 100.0).abs() <= NEWTON_REL * 100.0));
     }
@@ -157,7 +161,7 @@ mod abe2005_element_tests {
                     "ψ = {psi}, step {}: Δεᵖ_v = {d_vol_p}, 3αgΔλ = {flow_rule}",
                     w[1].step
                 );
-                if w[1].surface == Surface::Cone {
+                if w[1].branch == "cone" {
                     plastic_steps += 1;
                     assert!(d_vol_p > 0.0);
                 }
@@ -173,13 +177,13 @@ mod abe2005_element_tests {
         let k = m.elasticity().bulk_modulus();
         let path = isotropic(&m, SymTensor::ZERO, -1e-3, 10).unwrap();
         let last = path.last().unwrap();
-        assert!(path.iter().all(|p| p.surface == Surface::Elastic));
+        assert!(path.iter().all(|p| p.branch == "elastic"));
         assert!(rel_err(last.stress.mean(), -1e-3 * k) <= ROUNDING_REL);
         // extension: the cone's tip p = k0/(3α) is the largest mean tension.
         let path = isotropic(&m, SymTensor::ZERO, 1e-4, 10).unwrap();
         let tip = m.k0() / (3.0 * m.alpha());
         let last = path.last().unwrap();
-        assert_eq!(last.surface, Surface::Apex);
+        assert_eq!(last.branch, "apex");
         for s in [last.stress.xx, last.stress.yy, last.stress.zz] {
             assert!(rel_err(s, tip) <= ROUNDING_REL);
         }
@@ -222,6 +226,7 @@ mod hardening {
         let control = MixedControl {
             stress_controlled: [false; 6],
             increment: [0.0, 0.0, 0.0, 0.5 * d_gamma, 0.0, 0.0],
+            dt: QUASI_STATIC_STEP,
         };
         run_mixed(m, sigma, state, &control, n).unwrap()
     }
@@ -287,7 +292,7 @@ mod hardening {
             assert!(rel_err(tau1, b + k) <= ROUNDING_REL);
             // a step incommensurate with k0/G so that no point lands exactly on the surface.
             let back = shear(&m, top.stress, top.state, -gy / 7.3, 300);
-            let i = back.iter().position(|p| p.surface != Surface::Elastic).unwrap();
+            let i = back.iter().position(|p| p.branch != "elastic").unwrap();
             let (before, after) = (&back[i - 1], &back[i]);
             assert!(
                 before.stress.xy > predicted && after.stress.xy <= predicted,
@@ -324,7 +329,7 @@ mod hardening {
             assert!(last.stress.xx.abs() <= NEWTON_REL * last.stress.yy.abs());
             // H > 0: stress keeps growing after yield.
             let mid = &path[path.len() / 2];
-            assert!(mid.surface == Surface::Cone && last.stress.yy < mid.stress.yy);
+            assert!(mid.branch == "cone" && last.stress.yy < mid.stress.yy);
         }
     }
 }
@@ -355,8 +360,8 @@ mod apex {
         let d_eps = SymTensor::new(2e-3, 3e-3, 0.0, 4e-4, 0.0, 0.0);
         let g = m.elasticity().shear_modulus();
         let trial = sigma + m.elasticity().stress_increment(&d_eps);
-        let rep = m.update(&mut sigma, &mut state, &d_eps).unwrap();
-        assert_eq!(rep.surface, Surface::Apex);
+        let rep = m.update(&mut sigma, &mut state, &d_eps, DT).unwrap();
+        assert_eq!(rep.branch, DpBranch::APEX);
         assert_eq!(sigma, SymTensor::ZERO);
         // Δλ = qᵗʳ/G: the deviatoric plastic strain that removes the trial deviator.
         assert!(rel_err(rep.delta_lambda, trial.j2().sqrt() / g) <= ROUNDING_REL);
@@ -366,7 +371,7 @@ mod apex {
         assert_eq!(rep.dissipation, 0.0);
         // pure hydrostatic tension from zero stress: still zero, no multiplier.
         let rep =
-            m.update(&mut sigma, &mut state, &SymTensor::new(1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0));
+            m.update(&mut sigma, &mut state, &SymTensor::new(1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0), DT);
         assert_eq!(rep.unwrap().delta_lambda, 0.0);
         assert_eq!(sigma, SymTensor::ZERO);
     }
@@ -383,8 +388,8 @@ mod apex {
             let sigma0 = SymTensor::new(-20.0, -30.0, -25.0, 5.0, 1.0, 0.0);
             let d_eps = SymTensor::new(4e-4, 5e-4, 3e-4, 1e-5, 0.0, 2e-5);
             let (mut sigma, mut state) = (sigma0, state0);
-            let rep = m.update(&mut sigma, &mut state, &d_eps).unwrap();
-            assert_eq!(rep.surface, Surface::Apex, "ψ = {psi}, M = {mixing}");
+            let rep = m.update(&mut sigma, &mut state, &d_eps, DT).unwrap();
+            assert_eq!(rep.branch, DpBranch::APEX, "ψ = {psi}, M = {mixing}");
             let trial = sigma0 + el.stress_increment(&d_eps);
             let xi = trial.deviator() - beta0;
             let b = g + (1.0 - mixing) * h;
@@ -410,21 +415,21 @@ mod apex {
         let m = sand(10.0, 10.0, 1.0e5, 0.6);
         let sigma0 = SymTensor::new(-10.0, -20.0, -10.0, 4.0, 0.0, 0.0);
         let shear = SymTensor::plane(0.0, 0.0, 3e-5);
-        let mut prev: Option<(SymTensor, Surface)> = None;
+        let mut prev: Option<(SymTensor, Branch)> = None;
         let mut switched = false;
         for i in 0..=2000 {
             let t = 1e-7 * i as f64;
             let d_eps = shear + SymTensor::new(t, t, t, 0.0, 0.0, 0.0);
             let (mut s, mut st) = (sigma0, m.initial_state());
-            let rep = m.update(&mut s, &mut st, &d_eps).unwrap();
+            let rep = m.update(&mut s, &mut st, &d_eps, DT).unwrap();
             if let Some((ps, surf)) = prev {
                 // Lipschitz bound: |Δσ| ≤ ‖C‖ |Δε| with ‖C‖ ≤ 3K + 2G for this isotropic map.
                 let el = m.elasticity();
                 let lip = 3.0 * el.bulk_modulus() + 2.0 * el.shear_modulus();
                 assert!((s - ps).norm() <= lip * 1e-7 * 3f64.sqrt() * (1.0 + 1e-9));
-                switched |= surf == Surface::Cone && rep.surface == Surface::Apex;
+                switched |= surf == DpBranch::CONE && rep.branch == DpBranch::APEX;
             }
-            prev = Some((s, rep.surface));
+            prev = Some((s, rep.branch));
         }
         assert!(switched, "the sweep must cross from the cone to the apex");
     }
@@ -446,14 +451,14 @@ mod apex {
         let mut state = m.initial_state();
         let big = SymTensor::plane(0.0, 0.0, 1.0);
         let before = (sigma, state);
-        let err = m.update(&mut sigma, &mut state, &big).unwrap_err();
+        let err = m.update(&mut sigma, &mut state, &big, DT).unwrap_err();
         assert!(matches!(err, ConstitutiveError::EmptyElasticDomain { k } if k < 0.0));
         assert_eq!((sigma, state), before);
         // a small shear is fine: von Mises-like cone, softening.
         // 2G ε_xy = 16 Pa > k0 = c = 10 Pa (α = 0): yields, softens k by 2 Pa.
         let small = SymTensor::plane(0.0, 0.0, 2e-5);
-        let rep = m.update(&mut sigma, &mut state, &small).unwrap();
-        assert_eq!(rep.surface, Surface::Cone);
+        let rep = m.update(&mut sigma, &mut state, &small, DT).unwrap();
+        assert_eq!(rep.branch, DpBranch::CONE);
         assert!(state.k < m.k0());
     }
 }
@@ -608,7 +613,7 @@ mod validation {
         ];
         for (s0, st0, d) in cases {
             let (mut s, mut st) = (s0, st0);
-            let r = m.update(&mut s, &mut st, &d);
+            let r = m.update(&mut s, &mut st, &d, DT);
             assert!(r.is_err(), "{d:?} {s0:?} {st0:?}");
             assert_eq!(s.to_array().map(f64::to_bits), s0.to_array().map(f64::to_bits));
             assert_eq!(st.k.to_bits(), st0.k.to_bits());
@@ -625,7 +630,7 @@ mod validation {
             let (sp0, dp) = (PlaneTensor::from_sym(&s0), PlaneTensor::from_sym(&d));
             for rotation in [None, Some((0.6, 0.8))] {
                 let (mut sp, mut stp) = (sp0, st0);
-                let e = m.update_plane(&mut sp, &mut stp, &dp, rotation).unwrap_err();
+                let e = m.update_plane(&mut sp, &mut stp, &dp, DT, rotation).unwrap_err();
                 if rotation.is_none() {
                     // (turned, a NaN spreads to other components and the name may differ)
                     assert_eq!(e.to_string(), r.as_ref().unwrap_err().to_string());
@@ -643,7 +648,7 @@ mod validation {
                 DpState { back_stress: SymTensor::new(0.0, 0.0, 0.0, 0.0, 0.0, value), ..state0 };
             let (sp0, mut stp) = (PlaneTensor::from_sym(&sigma0), st0);
             let mut sp = sp0;
-            let e = m.update_plane(&mut sp, &mut stp, &PlaneTensor::ZERO, None).unwrap_err();
+            let e = m.update_plane(&mut sp, &mut stp, &PlaneTensor::ZERO, DT, None).unwrap_err();
             assert!(e.to_string().contains("back_stress.zx") && e.to_string().contains(expected));
             assert_eq!(sp, sp0);
             assert_eq!(
@@ -653,9 +658,65 @@ mod validation {
         }
         let (mut s, mut st) = (sigma0, state0);
         let msg = m
-            .update(&mut s, &mut st, &SymTensor::plane(0.0, 0.0, f64::NAN))
+            .update(&mut s, &mut st, &SymTensor::plane(0.0, 0.0, f64::NAN), DT)
             .unwrap_err()
             .to_string();
         assert!(msg.contains("xy") && msg.contains("NaN"), "{msg}");
+    }
+}
+
+/// The μ(I) element test: simple shear at a constant rate γ̇ under a held normal stress. Once
+/// the elastic shear strain is built up (γ ≫ μ p/G) the stress ratio is Jop et al.'s law,
+/// τ/p = μ(I) with I = γ̇ d/√(p/ρ_s), at every rate, and the pressure never changes (no
+/// dilatancy).
+mod mu_i_element_test {
+    use mpm_constitutive::element_test::{MixedControl, run_mixed};
+    use mpm_constitutive::{ConstitutiveModel, MuI, MuIParams, SymTensor};
+
+    /// the Newton tolerance of the held σ_yy (1e-9) and the central-difference tangent: the
+    /// steady state is reached to far below this after 40 relaxation strains.
+    const STEADY_REL: f64 = 1e-6;
+
+    #[test]
+    fn steady_simple_shear_follows_mu_of_i_at_every_rate() {
+        let m = MuI::new(MuIParams {
+            young: 1.0e6,
+            poisson: 0.3,
+            mu_s: 0.382,
+            mu_2: 0.643,
+            i0: 0.279,
+            grain_diameter: 0.53e-3,
+            grain_density: 2450.0,
+        })
+        .unwrap();
+        let p = 400.0;
+        let sigma0 = SymTensor::IDENTITY * -p;
+        let mut ratios = Vec::new();
+        // inertial numbers from 1e-4 to ~1: rates spanning four decades.
+        for rate in [0.1, 1.0, 10.0, 100.0, 1000.0] {
+            // γ = 0.01 in 200 steps: the elastic strain μ p/G ≈ 4e-4 builds within ~10 steps.
+            let n = 200;
+            let d_gamma = 0.01 / n as f64;
+            let control = MixedControl {
+                stress_controlled: [false, true, false, false, false, false],
+                increment: [0.0, 0.0, 0.0, 0.5 * d_gamma, 0.0, 0.0],
+                dt: d_gamma / rate,
+            };
+            let path = run_mixed(&m, sigma0, m.initial_state(), &control, n).unwrap();
+            let last = path.last().unwrap();
+            let pressure = -last.stress.mean();
+            assert!((pressure - p).abs() <= STEADY_REL * p, "p = {pressure}");
+            assert_eq!(last.branch, "flowing");
+            let expected = m.friction(m.inertial_number(rate, p));
+            let ratio = last.stress.xy.abs() / pressure;
+            assert!(
+                (ratio - expected).abs() <= STEADY_REL * expected,
+                "γ̇ = {rate}: τ/p = {ratio}, μ(I) = {expected}"
+            );
+            ratios.push(ratio);
+        }
+        // rate-dependent: friction grows with the rate, between μ_s and μ_2.
+        assert!(ratios.windows(2).all(|w| w[1] > w[0]));
+        assert!(ratios[0] > 0.382 && ratios[4] < 0.643);
     }
 }

@@ -1,7 +1,7 @@
 //! A validated scene: the file as written, and everything a run needs derived from it (the
 //! grid, the materials, the particle seeds, the solver settings, the output plan).
 
-use mpm_constitutive::{ConstitutiveModel, DpPerfectState, DpState, DruckerPrager, LinearElastic};
+use mpm_constitutive::{DpPerfectState, DpState, DruckerPrager, LinearElastic};
 use mpm_contact::RigidSlide;
 use mpm_grid::{RegularGrid, TerrainGrid};
 use mpm_solver::{SolverConfig, Vector};

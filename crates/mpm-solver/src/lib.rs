@@ -59,5 +59,5 @@ pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
-pub use solver::{Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};
+pub use solver::{BranchCounts, Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};
 pub use stages::timestep::{StepLimit, displacement_dt, stable_dt};

@@ -17,7 +17,7 @@
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU32};
 
-use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
+use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor};
 use mpm_contact::Boundary;
 use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
 use serde::{Deserialize, Serialize};
@@ -28,7 +28,7 @@ use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
-use crate::stages::timestep::Fastest;
+use crate::stages::timestep::{Fastest, signal_cap};
 
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,10 +43,55 @@ pub struct StepReport {
     pub courant: Real,
     /// Number of active grid nodes.
     pub active_nodes: usize,
-    /// Particles whose last constitutive update was plastic on the cone.
-    pub cone_returns: usize,
-    /// Particles whose last constitutive update returned to the apex.
-    pub apex_returns: usize,
+    /// How many particles took each branch of their model in the step's last stress update.
+    pub branches: BranchCounts,
+}
+
+/// How many particles took each branch of their material's model in one stress update, counted by
+/// the index the model reports ([`mpm_constitutive::Branch`]) and named by the model
+/// ([`ConstitutiveModel::BRANCHES`]): the solver knows no model's vocabulary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BranchCounts {
+    names: &'static [&'static str],
+    counts: [usize; MAX_BRANCHES],
+}
+
+impl BranchCounts {
+    /// counts of the branches `names` from a tally by index; with `counted` false (an elastic
+    /// model, whose updates the solver does not tally), all `particles` are on the elastic branch.
+    pub(crate) fn new(
+        names: &'static [&'static str],
+        mut counts: [usize; MAX_BRANCHES],
+        particles: usize,
+        counted: bool,
+    ) -> Self {
+        if !counted {
+            counts = [0; MAX_BRANCHES];
+            counts[0] = particles;
+        }
+        Self { names, counts }
+    }
+
+    /// no particle counted yet (before the first step).
+    pub(crate) fn none(names: &'static [&'static str]) -> Self {
+        Self { names, counts: [0; MAX_BRANCHES] }
+    }
+
+    /// the number of particles on the branch called `name`; `None` for a name the model does not
+    /// use.
+    pub fn get(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| *n == name).map(|i| self.counts[i])
+    }
+
+    /// (name, count) of every branch of the model, in its order (the elastic branch first).
+    pub fn iter(&self) -> impl Iterator<Item = (&'static str, usize)> + '_ {
+        self.names.iter().copied().zip(self.counts)
+    }
+
+    /// the particles on any branch but the elastic one.
+    pub fn plastic(&self) -> usize {
+        self.counts.iter().skip(1).sum()
+    }
 }
 
 /// Why [`Solver::run_until`] ended.
@@ -388,15 +433,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let mean_mass = particles.total_mass() / particles.len() as Real;
         let cell_size = shape.min_cell_size();
         let p_modulus: Vec<Real> =
-            materials.iter().map(|m| m.elasticity().p_wave_modulus()).collect();
+            materials.iter().map(|m| m.p_wave_modulus(&m.initial_state())).collect();
         let reference_density =
             reference_density(&particles, materials.len(), checkpoint.reference_density)?;
         // A material no particle uses has no reference: no cap (its true signal counts).
-        let signal_cap = p_modulus
-            .iter()
-            .zip(&reference_density)
-            .map(|(m, r)| if r.is_finite() { m / r } else { Real::INFINITY })
-            .collect();
+        let signal_cap =
+            p_modulus.iter().zip(&reference_density).map(|(m, r)| signal_cap(*m, *r)).collect();
         let mut solver = Self {
             shape,
             materials,
@@ -418,8 +460,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 dt: 0.0,
                 courant: 0.0,
                 active_nodes: 0,
-                cone_returns: 0,
-                apex_returns: 0,
+                branches: BranchCounts::none(M::BRANCHES),
             },
             next_signal: None,
             grid_mass_kept: None,
@@ -523,7 +564,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let kinetic = par::sum(p.len(), |i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
         let strain = par::sum(p.len(), |i| {
             let m = &self.materials[usize::from(p.material[i])];
-            p.volume[i] * m.elasticity().strain_energy_density(&p.stress[i].to_sym())
+            p.volume[i] * m.stored_energy_density(&p.stress[i].to_sym(), &p.state[i])
         });
         let potential = par::sum(p.len(), |i| -p.mass[i] * g.dot(p.position[i]));
         let mut e = EnergyLedger {
@@ -572,7 +613,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.grid_mass_kept = None;
         self.locate()?;
         self.detect_contact(dt);
-        let (cone, apex) = match self.config.scheme {
+        let branches = match self.config.scheme {
             Scheme::Usl => {
                 self.p2g_all(dt);
                 self.grid_solve(dt);
@@ -617,15 +658,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // (the guard may re-locate: the report counts this step's nodes)
         let active_nodes = self.scratch.active.len();
         self.check_inside()?;
-        self.last = StepReport {
-            step: self.step,
-            time: self.time,
-            dt,
-            courant,
-            active_nodes,
-            cone_returns: cone,
-            apex_returns: apex,
-        };
+        self.last =
+            StepReport { step: self.step, time: self.time, dt, courant, active_nodes, branches };
         Ok(self.last)
     }
 

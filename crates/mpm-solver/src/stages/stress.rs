@@ -8,7 +8,7 @@
 //! stress magnitude unchanged under rigid rotation. Then the constitutive update (eqs 10–11 or
 //! 23–25) and the volume V_p ← V_p (1 + tr Δε) (eq 12, ρ ← ρ / (1 + tr Δε)).
 
-use mpm_constitutive::{ConstitutiveModel, PlaneTensor, Surface};
+use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor};
 use mpm_grid::{ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
@@ -16,15 +16,15 @@ use crate::config::{Scheme, Transfer};
 use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
-use crate::solver::{Ahead, Solver};
+use crate::solver::{Ahead, BranchCounts, Solver};
 use crate::stages::locate::store;
-use crate::stages::timestep::{Fastest, SLOWEST, particle_signal};
+use crate::stages::timestep::{Fastest, SLOWEST, particle_signal, wave_modulus};
 
 /// What one chunk of particles reports back.
 struct ChunkTally {
     dissipation: Real,
-    cone: usize,
-    apex: usize,
+    /// particles per branch of their model (counted for plastic models only)
+    branches: [usize; MAX_BRANCHES],
     /// the chunk's fastest signal and speed, when the step asked for them
     signal: Fastest,
     /// some particle's next stencil has other nodes than its last one
@@ -39,8 +39,7 @@ impl Default for ChunkTally {
     fn default() -> Self {
         Self {
             dissipation: 0.0,
-            cone: 0,
-            apex: 0,
+            branches: [0; MAX_BRANCHES],
             signal: SLOWEST,
             changed: false,
             missing: false,
@@ -51,8 +50,8 @@ impl Default for ChunkTally {
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// updates every particle's stress, state and volume over `dt` from the nodal velocities in
-    /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns the numbers of
-    /// cone and apex returns. With `last`, this is the step's last particle loop: positions and
+    /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns how many
+    /// particles took each branch of their model. With `last`, this is the step's last particle loop: positions and
     /// velocities are final, and once a particle's old gradients are used it also computes the
     /// particle's stencil for the next step (which `locate` then need not recompute) and its
     /// signal for the next time step (`timestep.rs`).
@@ -60,8 +59,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         &mut self,
         dt: Real,
         last: bool,
-    ) -> Result<(usize, usize), SolverError> {
+    ) -> Result<BranchCounts, SolverError> {
         let (moduli, caps) = (&self.p_modulus, &self.signal_cap);
+        let reference = &self.reference_density;
         let weight = self.true_signal_weight();
         let shape = &self.shape;
         let sc = &mut self.scratch;
@@ -136,7 +136,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let theta = 0.5 * dt * (lyx - lxy);
                     let rotation = (objective && theta != 0.0).then(|| cos_sin(theta));
                     let report = model
-                        .update_plane(&mut stress[j], &mut state[j], &d_eps, rotation)
+                        .update_plane(&mut stress[j], &mut state[j], &d_eps, dt, rotation)
                         .map_err(|source| SolverError::Constitutive {
                             step,
                             particle: q,
@@ -155,11 +155,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     if M::IS_PLASTIC {
                         // Dissipation per unit volume, over the volume at the start of the increment.
                         tally.dissipation += volume[j] * report.dissipation;
-                        match report.surface {
-                            Surface::Cone => tally.cone += 1,
-                            Surface::Apex => tally.apex += 1,
-                            Surface::Elastic => {}
-                        }
+                        tally.branches[report.branch.index()] += 1;
                     }
                     // No finiteness check of the new stress: the model returns a finite
                     // stress or an error for finite input (ConstitutiveModel::update), and a
@@ -169,8 +165,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     if last {
                         let m = usize::from(material[q]);
                         let speed = velocity[q].length();
+                        let (modulus, cap) =
+                            wave_modulus(model, &state[j], moduli[m], caps[m], reference[m]);
                         let signal =
-                            particle_signal(moduli[m], caps[m], weight, volume[j], mass[q], speed);
+                            particle_signal(modulus, cap, weight, volume[j], mass[q], speed);
                         tally.signal = tally.signal.with(signal, speed, q);
                     }
                 }
@@ -178,13 +176,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             })
             .collect();
 
-        let (mut cone, mut apex, mut signal) = (0, 0, SLOWEST);
+        let (mut branches, mut signal) = ([0; MAX_BRANCHES], SLOWEST);
         let (mut changed, mut missing, mut outside) = (false, false, false);
         for r in results {
             let t = r?;
             self.dissipation.plastic += t.dissipation;
-            cone += t.cone;
-            apex += t.apex;
+            for (all, chunk) in branches.iter_mut().zip(t.branches) {
+                *all += chunk;
+            }
             signal = Fastest::merge(signal, t.signal);
             changed |= t.changed;
             missing |= t.missing;
@@ -200,7 +199,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.scratch.stencils_ahead = Some(Ahead { changed, numbered: !missing });
             }
         }
-        Ok((cone, apex))
+        Ok(BranchCounts::new(M::BRANCHES, branches, self.particles.len(), M::IS_PLASTIC))
     }
 }
 

@@ -120,7 +120,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 let mut best = SLOWEST;
                 for i in c * chunk..((c + 1) * chunk).min(n) {
                     let m = usize::from(p.material[i]);
-                    let (modulus, cap) = (self.p_modulus[m], self.signal_cap[m]);
+                    let (modulus, cap) = wave_modulus(
+                        &self.materials[m],
+                        &p.state[i],
+                        self.p_modulus[m],
+                        self.signal_cap[m],
+                        self.reference_density[m],
+                    );
                     let speed = p.velocity[i].length();
                     let signal =
                         particle_signal(modulus, cap, weight, p.volume[i], p.mass[i], speed);
@@ -214,6 +220,32 @@ impl Fastest {
 /// The identity of [`Fastest::merge`]: no signal, no particle.
 pub(crate) const SLOWEST: Fastest = Fastest { signal: (0.0, usize::MAX), speed: (0.0, usize::MAX) };
 
+/// (M, M/ρ_ref) of a particle of material `model` at `state`: the material's `modulus` and
+/// `cap`, asked once per material, unless the model's wave speed varies with the state
+/// ([`ConstitutiveModel::WAVE_SPEED_VARIES`]); then the model is asked at this particle's state,
+/// with ρ_ref its material's `reference` density (∞ for none: no cap).
+#[inline(always)]
+pub(crate) fn wave_modulus<M: ConstitutiveModel>(
+    model: &M,
+    state: &M::State,
+    modulus: Real,
+    cap: Real,
+    reference: Real,
+) -> (Real, Real) {
+    if M::WAVE_SPEED_VARIES {
+        let modulus = model.p_wave_modulus(state);
+        (modulus, signal_cap(modulus, reference))
+    } else {
+        (modulus, cap)
+    }
+}
+
+/// M/ρ_ref, the cap of c̃_p² (module docs); +∞ where no particle of the material gave a
+/// reference density ρ_ref (its true signal counts).
+pub(crate) fn signal_cap(modulus: Real, reference: Real) -> Real {
+    if reference.is_finite() { modulus / reference } else { Real::INFINITY }
+}
+
 /// max(ĉ_p + |v_p|, w (c̃_p + |v_p|)) with c̃_p² = M V_p / m_p for P-wave modulus M,
 /// ĉ_p² = min(c̃_p², `cap`), `cap` = M/ρ_ref and w = `weight` = C/C_max (module docs), for a
 /// particle of speed |v_p| = `speed`; a non-finite value counts as infinite.
@@ -244,11 +276,13 @@ pub(crate) fn faster(a: (Real, usize), b: (Real, usize)) -> (Real, usize) {
 
 #[cfg(test)]
 mod tests {
+    use glam::DMat3;
     use mpm_constitutive::LinearElastic;
+    use mpm_constitutive::{ConstitutiveError, ConstitutiveModel, SymTensor, UpdateReport};
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
-    use crate::{Solver, SolverConfig, SolverError, TimeStep, Vector};
+    use crate::{Scheme, Solver, SolverConfig, SolverError, TimeStep, Vector};
 
     /// Two particles at rest of one material (ρ₀ = 1000 kg/m³, E = 1 MPa) on 0.25 m cells.
     fn pair() -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
@@ -280,6 +314,73 @@ mod tests {
 
     /// One rounding of a square root and a division.
     const DT_TOL: f64 = 1e-14;
+
+    /// Elasticity whose P-wave modulus is (1 + n) M₀ after n updates: a model whose wave speed
+    /// varies with the state.
+    #[derive(Clone)]
+    struct Stiffening(LinearElastic);
+
+    impl ConstitutiveModel for Stiffening {
+        type State = f64;
+        const IS_PLASTIC: bool = false;
+        const BRANCHES: &'static [&'static str] = &["elastic"];
+        const WAVE_SPEED_VARIES: bool = true;
+        fn initial_state(&self) -> f64 {
+            0.0
+        }
+        fn p_wave_modulus(&self, updates: &f64) -> f64 {
+            (1.0 + updates) * self.0.p_wave_modulus()
+        }
+        fn stored_energy_density(&self, sigma: &SymTensor, _state: &f64) -> f64 {
+            self.0.strain_energy_density(sigma)
+        }
+        fn update(
+            &self,
+            sigma: &mut SymTensor,
+            updates: &mut f64,
+            d_eps: &SymTensor,
+            dt: f64,
+        ) -> Result<UpdateReport, ConstitutiveError> {
+            let report = self.0.update(sigma, &mut (), d_eps, dt)?;
+            *updates += 1.0;
+            Ok(report)
+        }
+        fn rotate_state(&self, _state: &mut f64, _r: &DMat3) {}
+        fn equivalent_plastic_strain(&self, _state: &f64) -> f64 {
+            0.0
+        }
+    }
+
+    /// The time step asks the model for its wave speed at each particle's current state: after
+    /// one update the modulus doubles, so Δt shrinks by √2, both where the stress update computes
+    /// the next signal (USL) and where a separate pass does (after `particles_mut`).
+    #[test]
+    fn the_time_step_follows_a_state_dependent_wave_speed() {
+        let elastic = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+        let mut particles = Particles::default();
+        for x in [0.6, 1.4] {
+            let position = Vector::new(x, 1.0);
+            let volume = 0.125 * 0.125;
+            particles.push(NewParticle::unstressed(position, Vector::ZERO, volume, 1000.0, 0.0));
+        }
+        let config = SolverConfig {
+            gravity: Vector::ZERO,
+            time_step: TimeStep::Courant(0.5),
+            scheme: Scheme::Usl,
+            ..Default::default()
+        };
+        let mut s =
+            Solver::new(Bilinear(grid), vec![Stiffening(elastic)], particles, config).unwrap();
+        let dt0 = 0.5 * 0.25 / (elastic.p_wave_modulus() / 1000.0).sqrt();
+        let first = s.step().unwrap();
+        assert!((first.dt / dt0 - 1.0).abs() < DT_TOL);
+        let second = s.step().unwrap();
+        assert!((second.dt / (dt0 / 2f64.sqrt()) - 1.0).abs() < DT_TOL, "{}", second.dt / dt0);
+        let _ = s.particles_mut();
+        let (third, _) = s.time_step(f64::INFINITY).unwrap();
+        assert!((third / (dt0 / 3f64.sqrt()) - 1.0).abs() < DT_TOL, "{}", third / dt0);
+    }
 
     #[test]
     fn a_dilated_particle_does_not_shrink_the_time_step() {
