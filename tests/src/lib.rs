@@ -10,6 +10,8 @@
 
 use std::ops::ControlFlow;
 
+pub mod open_core;
+
 use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};
 use mpm_contact::Friction;
 use mpm_grid::{

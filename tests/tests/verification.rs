@@ -7,5 +7,6 @@ mod verification {
     pub mod floor;
     pub mod guards;
     pub mod objectivity;
+    pub mod open_core;
     pub mod small_mass;
 }

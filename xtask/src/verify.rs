@@ -5,6 +5,8 @@
 //! The solver-level cases call the drivers of the `mpm-tests` library, the same code the workspace
 //! tests assert on; the element tests call `mpm_constitutive::element_test`.
 
+mod open_core;
+
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -425,6 +427,15 @@ pub fn run(quick: bool) -> Result<bool> {
             y_label: "mean velocity (m/s)".into(),
             series: bar_series,
         }],
+        1,
+    ));
+
+    // The open core: periodic sides, μ(I) rheology.
+    let open_panels = open_core::rows(&mut rows, quick);
+    figures.push((
+        "open_core.png",
+        "μ(I) flow down a periodic slope against Bagnold",
+        open_panels,
         1,
     ));
 

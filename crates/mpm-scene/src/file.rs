@@ -225,6 +225,10 @@ pub struct BoundariesSpec {
     /// the wall at the grid's last column.
     #[serde(default)]
     pub right_wall: Option<BoundarySpec>,
+    /// the grid's first and last columns are a periodic pair (regular grid, no side walls):
+    /// material leaving through one side enters through the other. Default false.
+    #[serde(default)]
+    pub periodic: bool,
 }
 
 /// One boundary's law: `{ friction = μ }`, `{ friction_angle_deg = φ_b }`, `"rough"`, `"fixed"`

@@ -114,6 +114,20 @@ impl Boundaries {
     }
 }
 
+/// A periodic pair of sides: the grid's columns of nodes `i` and `i + columns` are one column
+/// (their sums are shared), and a particle leaving through one side enters through the other,
+/// `length` = `columns` cells further. The other sides keep their boundaries; the paired sides
+/// can have none.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Periodic {
+    /// x of the left side (m).
+    pub x_min: Real,
+    /// cells between the two sides (≥ 4, so that no stencil reaches a column twice).
+    pub columns: u32,
+    /// distance between the two sides (m): `columns` cell widths.
+    pub length: Real,
+}
+
 /// Settings of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverConfig {
@@ -125,6 +139,9 @@ pub struct SolverConfig {
     pub gravity: Vector,
     /// Boundary friction laws.
     pub boundaries: Boundaries,
+    /// A periodic pair of sides in x (`None`: the sides are walls or open).
+    #[serde(default)]
+    pub periodic: Option<Periodic>,
     /// Nodes whose mass is below this fraction of the mean particle mass take no acceleration from
     /// internal force (the small-nodal-mass instability of §2(3)). Default 1e-4, which leaves
     /// MUSL and USAVG runs unchanged (their strains use remapped velocities). USL needs about 1e-2
@@ -151,6 +168,7 @@ impl Default for SolverConfig {
             time_step: TimeStep::default(),
             gravity: Vector::new(0.0, -STANDARD_GRAVITY),
             boundaries: Boundaries::default(),
+            periodic: None,
             small_mass_ratio: 1e-4,
             objective_stress: false,
             gravity_ramp: 0.0,
@@ -212,6 +230,30 @@ impl SolverConfig {
                 value: self.small_mass_ratio,
                 expected: "0 ≤ ratio < 1 (fraction of the mean particle mass)",
             });
+        }
+        if let Some(p) = self.periodic {
+            if p.columns < 4 {
+                return Err(SolverError::InvalidSetting {
+                    name: "periodic.columns",
+                    value: f64::from(p.columns),
+                    expected: "at least 4 cells between the periodic sides",
+                });
+            }
+            if !(p.length > 0.0 && p.length.is_finite() && p.x_min.is_finite()) {
+                return Err(SolverError::InvalidSetting {
+                    name: "periodic.length",
+                    value: p.length,
+                    expected: "a positive, finite period (m) from a finite x_min",
+                });
+            }
+            let b = self.boundaries;
+            if b.left_wall.is_some() || b.right_wall.is_some() {
+                return Err(SolverError::InvalidSetting {
+                    name: "periodic",
+                    value: p.length,
+                    expected: "periodic sides without left or right walls",
+                });
+            }
         }
         Ok(())
     }

@@ -54,7 +54,9 @@ pub mod particles;
 pub mod solver;
 mod stages;
 
-pub use config::{Boundaries, Contact, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer};
+pub use config::{
+    Boundaries, Contact, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer,
+};
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
 pub use math::{Matrix, Real, Vector};

@@ -619,6 +619,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.advance_velocity(dt);
+                self.wrap_periodic();
                 self.update_stress(dt, true)?
             }
             Scheme::Musl => {
@@ -626,6 +627,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
+                self.wrap_periodic();
                 self.update_stress(dt, true)?
             }
             Scheme::Usf => {
@@ -636,6 +638,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
+                self.wrap_periodic();
                 counts
             }
             Scheme::Usavg => {
@@ -647,6 +650,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
+                self.wrap_periodic();
                 self.update_stress(0.5 * dt, true)?
             }
         };
@@ -661,6 +665,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.last =
             StepReport { step: self.step, time: self.time, dt, courant, active_nodes, branches };
         Ok(self.last)
+    }
+
+    /// Periodic sides ([`crate::Periodic`]): a particle that has left through one side enters
+    /// through the other, `length` further, once its step's grid passes are done (the remap
+    /// still needs the unwrapped position). Its potential energy −m g·x jumps by −m g·Δx, which
+    /// the ledger books as external work: the endless strip supplies it. Nothing without
+    /// periodic sides.
+    fn wrap_periodic(&mut self) {
+        let Some(periodic) = self.config.periodic else { return };
+        let g = self.config.gravity_at(self.time);
+        let p = &mut self.particles;
+        let mut supplied = 0.0;
+        for (x, m) in p.position.iter_mut().zip(&p.mass) {
+            let shift = -((x.x - periodic.x_min) / periodic.length).floor() * periodic.length;
+            if shift != 0.0 && shift.is_finite() {
+                x.x += shift;
+                supplied += -m * g.x * shift;
+            }
+        }
+        self.dissipation.external += supplied;
     }
 
     /// the end-of-step guard: every particle is still inside the grid (G2P already checked that

@@ -1,11 +1,57 @@
 //! `[boundaries]`: the Coulomb node boundaries (eqs 14–18) of the ground and the walls.
 
 use mpm_contact::{Boundary, ContactError, Friction};
-use mpm_solver::{Boundaries, Vector};
+use mpm_solver::{Boundaries, Periodic, Vector};
 
 use super::Ctx;
 use crate::error::SceneError;
 use crate::file::{BoundarySpec, SceneFile};
+use crate::scene::GridBuilt;
+
+/// `periodic = true`: the regular grid's sides as a periodic pair; refused on a terrain grid
+/// (its columns follow the ground, so its sides do not match) and beside a side wall.
+pub(super) fn periodic(
+    ctx: &Ctx<'_>,
+    f: &SceneFile,
+    grid: &GridBuilt,
+) -> Result<Option<Periodic>, SceneError> {
+    if !f.boundaries.periodic {
+        return Ok(None);
+    }
+    let path = "boundaries.periodic";
+    let GridBuilt::Regular(g) = grid else {
+        return Err(ctx.err(
+            path,
+            Some("true".into()),
+            "periodic sides need a regular grid",
+            "a `kind = \"regular\"` grid",
+            "use a regular grid and turn gravity for an inclined strip ([solver] gravity)",
+        ));
+    };
+    if f.boundaries.left_wall.is_some() || f.boundaries.right_wall.is_some() {
+        return Err(ctx.err(
+            path,
+            Some("true".into()),
+            "the periodic sides cannot also be walls",
+            "periodic = true without left_wall and right_wall",
+            "remove left_wall and right_wall, or periodic",
+        ));
+    }
+    let columns = g.cells()[0];
+    if columns < 4 {
+        return Err(ctx.range(
+            "grid.cells",
+            columns as f64,
+            "at least 4 columns between periodic sides",
+            "give the grid 4 or more columns",
+        ));
+    }
+    Ok(Some(Periodic {
+        x_min: g.origin().x,
+        columns: columns as u32,
+        length: columns as f64 * g.cell_size().x,
+    }))
+}
 
 /// The friction law of each declared boundary.
 pub(super) fn build(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Boundaries, SceneError> {

@@ -1,7 +1,7 @@
 //! `[solver]`: scheme, time step, gravity, thresholds, and the first Δt (eq 13).
 
 use mpm_solver::{
-    Boundaries, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
+    Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
 };
 
 use super::{Ctx, finite_pos, num, pair};
@@ -140,6 +140,7 @@ pub(super) fn config(
     s: &SolverSpec,
     settings: &Settings,
     boundaries: Boundaries,
+    periodic: Option<Periodic>,
     kind: MaterialKind,
 ) -> Result<SolverConfig, SceneError> {
     let config = SolverConfig {
@@ -147,6 +148,7 @@ pub(super) fn config(
         time_step: settings.time_step,
         gravity: settings.gravity,
         boundaries,
+        periodic,
         small_mass_ratio: settings.small_mass_ratio,
         objective_stress: s.objective_stress.unwrap_or(kind == MaterialKind::DruckerPrager),
         gravity_ramp: settings.gravity_ramp,

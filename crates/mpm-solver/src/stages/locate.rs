@@ -125,6 +125,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
         sc.boundary.clear();
         let b = self.config.boundaries;
+        let periodic = self.config.periodic.is_some();
         if b.any() {
             for (i, &node) in active.nodes().iter().enumerate() {
                 let normals = shape.boundary_normals(node);
@@ -147,7 +148,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 if let Some(first) = planes[0] {
                     let here = shape.node_position(node);
                     let mut points = [here; 3];
-                    let mirror = shape.mirror(node).and_then(|(image, normal)| {
+                    // (periodic sides are no mirror planes: their ghosts are image nodes)
+                    let across_side = |normal: Vector| periodic && normal.x != 0.0;
+                    let mirror = shape.mirror(node).filter(|&(_, n)| !across_side(n));
+                    let mirror = mirror.and_then(|(image, normal)| {
                         let fixed = planes
                             .iter()
                             .flatten()

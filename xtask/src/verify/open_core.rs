@@ -1,0 +1,122 @@
+//! Verify rows of the open core: a periodic pair of sides (a conservation law) and the μ(I)
+//! rheology (its element test against Jop et al.'s law; steady inclined flow against Bagnold's
+//! profile).
+
+use mpm_constitutive::element_test::{MixedControl, run_mixed};
+use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_grid::RegularShape;
+use mpm_tests::open_core::{bagnold, glass_beads, periodic_block};
+
+use super::Rows;
+use crate::plot::{Mark, Panel, Series};
+
+/// Momentum through the periodic sides: rounding of a few hundred steps' sums (see the
+/// workspace test).
+const PERIODIC_MOMENTUM_REL: f64 = 1e-12;
+/// Positions after a rigid translation through the sides: rounding of x + Δt v (m).
+const PERIODIC_POSITION_ABS: f64 = 1e-12;
+/// The bound on the steady velocity profile, relative to the surface speed.
+const BAGNOLD_REL: f64 = 0.02;
+/// The element test's steady stress ratio: Newton tolerance and a central-difference tangent.
+const MU_I_REL: f64 = 1e-6;
+
+/// appends the rows and returns the Bagnold figure's panel.
+pub(super) fn rows(rows: &mut Rows, quick: bool) -> Vec<Panel> {
+    for kind in [RegularShape::Bilinear, RegularShape::BSpline] {
+        let case = format!("periodic strip, elastic block at 2 m/s, {}", kind.name());
+        match periodic_block(kind) {
+            Ok(r) => {
+                let change =
+                    (r.momentum_end - r.momentum_start).length() / r.momentum_start.length();
+                rows.at_most(
+                    (&case, "|Δp|/|p0| after crossing the sides"),
+                    "0 (no force acts)",
+                    "conservation of momentum",
+                    change.max(r.momentum_drift),
+                    PERIODIC_MOMENTUM_REL,
+                    false,
+                );
+                rows.at_most(
+                    (&case, "worst particle off the translation (m)"),
+                    "0 (rigid translation)",
+                    "x0 + v t mod L",
+                    r.position_error,
+                    PERIODIC_POSITION_ABS,
+                    false,
+                );
+                rows.at_most(
+                    (&case, "particles that did not re-enter"),
+                    "0",
+                    "all leave through x = 1 m",
+                    (r.particles - r.wrapped) as f64,
+                    0.0,
+                    false,
+                );
+            }
+            Err(e) => rows.failed(&case, "periodic crossing", &e),
+        }
+    }
+
+    // μ(I) element test: steady simple shear at γ̇ = 10 1/s under p = 400 Pa.
+    let case = "μ(I) element test, simple shear γ̇ = 10/s, p = 400 Pa";
+    match glass_beads().map_err(|e| e.to_string()).and_then(|m| {
+        let (rate, p, n) = (10.0, 400.0, 200);
+        let d_gamma = 0.01 / n as f64;
+        let control = MixedControl {
+            stress_controlled: [false, true, false, false, false, false],
+            increment: [0.0, 0.0, 0.0, 0.5 * d_gamma, 0.0, 0.0],
+            dt: d_gamma / rate,
+        };
+        let path = run_mixed(&m, SymTensor::IDENTITY * -p, m.initial_state(), &control, n)
+            .map_err(|e| e.to_string())?;
+        let last = path.last().ok_or("empty path")?;
+        let ratio = last.stress.xy.abs() / -last.stress.mean();
+        Ok((m.friction(m.inertial_number(rate, p)), ratio))
+    }) {
+        Ok((expected, ratio)) => {
+            rows.rel(case, "τ/p", expected, "μ(I), Jop et al. 2006", ratio, MU_I_REL)
+        }
+        Err(e) => rows.failed(case, "τ/p", &e),
+    }
+
+    // Steady inclined flow on a periodic strip: 16 cells over the depth (the minimum),
+    // and 32 in the full run.
+    let mut series = Vec::new();
+    let resolutions: &[usize] = if quick { &[16] } else { &[16, 32] };
+    for &cells in resolutions {
+        let case = format!("Bagnold flow, μ(I), 24° periodic slope, {cells} cells over 8 mm");
+        match bagnold(cells, 2.0) {
+            Ok(r) => {
+                rows.at_most(
+                    (&case, "max |u − u_B| / u_B(h)"),
+                    "Bagnold profile",
+                    "u = (2I/3d)√(φg cosθ)(h^1.5 − (h−z)^1.5)",
+                    r.worst,
+                    BAGNOLD_REL,
+                    true,
+                );
+                rows.at_most(
+                    (&case, "change over the last 0.5 s / u_B(h)"),
+                    "0 (steady)",
+                    "flow from rest, t = 1.5 → 2 s",
+                    r.change,
+                    BAGNOLD_REL,
+                    true,
+                );
+                let pts = r.profile.iter().map(|&(z, u, _)| (u, 1e3 * z)).collect();
+                series.push(Series::new(format!("MPM, {cells} cells"), pts, Mark::Points));
+                if cells == 16 {
+                    let exact = r.profile.iter().map(|&(z, _, e)| (e, 1e3 * z)).collect();
+                    series.push(Series::new("Bagnold (exact)", exact, Mark::Reference));
+                }
+            }
+            Err(e) => rows.failed(&case, "steady profile", &e),
+        }
+    }
+    vec![Panel {
+        title: "μ(I) flow down a 24° slope: steady velocity profile".into(),
+        x_label: "u (m/s)".into(),
+        y_label: "height above the base (mm)".into(),
+        series,
+    }]
+}
