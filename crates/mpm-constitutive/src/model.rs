@@ -21,7 +21,7 @@ pub const MAX_BRANCHES: usize = 8;
 /// Which branch an update took: an index into the model's [`ConstitutiveModel::BRANCHES`], whose
 /// entry 0 is the elastic branch. A solver counts branches by this index and prints them by the
 /// model's names, so it needs no model's vocabulary.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Branch(u8);
 
 impl Branch {

@@ -148,6 +148,9 @@ pub(crate) struct BoundaryNode {
     pub(crate) touching: u8,
     /// For a ghost node of a wide stencil: its image across the plane.
     pub(crate) mirror: Option<Mirror>,
+    /// With periodic sides, for an image node beyond a side: the index in `Scratch::boundary`
+    /// of its partner (the same column of nodes), which books the pair's boundary work.
+    pub(crate) partner: Option<u32>,
 }
 
 /// The mirror image of a ghost node (a node outside the grid, reached by wide stencils) across a
@@ -336,7 +339,8 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) small_mass: Real,
     /// Smallest cell size L of eq 13 (m).
     pub(crate) cell_size: Real,
-    /// λ + 2G of each material (Pa), for the dilatational wave speed.
+    /// The P-wave modulus M (λ + 2G for elasticity) of each material's model at its initial
+    /// state (Pa), for the dilatational wave speed.
     pub(crate) p_modulus: Vec<Real>,
     /// Lightest initial density of each material (kg/m³): the time step counts a particle's
     /// density only where it exceeds this (`stages/timestep.rs`).
@@ -388,6 +392,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         checkpoint: Checkpoint<M::State>,
     ) -> Result<Self, SolverError> {
         config.validate()?;
+        const {
+            assert!(
+                !M::BRANCHES.is_empty() && M::BRANCHES.len() <= MAX_BRANCHES,
+                "a model names between 1 and MAX_BRANCHES branches"
+            )
+        };
         let particles = checkpoint.particles;
         if particles.is_empty() {
             return Err(SolverError::NoParticles);
@@ -540,7 +550,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// Σ_i m_i of the last particle-to-grid transfer: equals Σ_p m_p when the shape functions form
-    /// a partition of unity (a check of mass conservation at the grid).
+    /// a partition of unity (a check of mass conservation at the grid). With periodic sides an
+    /// image node and its partner both hold the pair's mass, which then counts twice.
     pub fn grid_mass(&self) -> Real {
         self.grid_mass_kept.unwrap_or_else(|| self.scratch.mass.iter().sum())
     }
@@ -619,7 +630,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.advance_velocity(dt);
-                self.wrap_periodic();
+                self.wrap_periodic(dt);
                 self.update_stress(dt, true)?
             }
             Scheme::Musl => {
@@ -627,7 +638,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
-                self.wrap_periodic();
+                self.wrap_periodic(dt);
                 self.update_stress(dt, true)?
             }
             Scheme::Usf => {
@@ -638,7 +649,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.p2g_force(dt);
                 self.grid_solve(dt);
                 self.g2p(dt)?;
-                self.wrap_periodic();
+                self.wrap_periodic(dt);
                 counts
             }
             Scheme::Usavg => {
@@ -650,7 +661,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.grid_solve(dt);
                 self.g2p(dt)?;
                 self.remap_velocity(dt);
-                self.wrap_periodic();
+                self.wrap_periodic(dt);
                 self.update_stress(0.5 * dt, true)?
             }
         };
@@ -672,9 +683,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// still needs the unwrapped position). Its potential energy −m g·x jumps by −m g·Δx, which
     /// the ledger books as external work: the endless strip supplies it. Nothing without
     /// periodic sides.
-    fn wrap_periodic(&mut self) {
+    ///
+    /// The gravity of the jump is the mid-step one: during a gravity ramp the ramp's work is
+    /// taken at the wrapped end positions, and the two together then book the potential change
+    /// the wrap causes at the end of the step.
+    fn wrap_periodic(&mut self, dt: Real) {
         let Some(periodic) = self.config.periodic else { return };
-        let g = self.config.gravity_at(self.time);
+        let g = self.config.gravity_at(self.time + 0.5 * dt);
         let p = &mut self.particles;
         let mut supplied = 0.0;
         for (x, m) in p.position.iter_mut().zip(&p.mass) {

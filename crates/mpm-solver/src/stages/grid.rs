@@ -82,6 +82,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             }
             b.touching = touching;
         }
+        // A periodic image and its partner are one column: held when either is.
+        for j in 0..sc.boundary.len() {
+            if let Some(k) = sc.boundary[j].partner {
+                let k = k as usize;
+                let both = sc.boundary[j].touching | sc.boundary[k].touching;
+                (sc.boundary[j].touching, sc.boundary[k].touching) = (both, both);
+            }
+        }
     }
 
     /// accelerations and end-of-step velocities of every active node, boundary nodes included.
@@ -141,6 +149,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             // what closes the ledger; the split along the first plane's normal is indicative
             // only, and either part can be negative in a step where a pressed node was moving
             // away from the wall.
+            if b.partner.is_some() {
+                // a periodic image: its partner, holding the same sums, books the pair's work.
+                continue;
+            }
             let mean_v = 0.5 * (v_rel + out.velocity);
             let n = b.planes[0].normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));

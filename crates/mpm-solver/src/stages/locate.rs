@@ -172,8 +172,27 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         points,
                         touching: 0,
                         mirror,
+                        partner: None,
                     });
                 }
+            }
+        }
+        if let Some(periodic) = self.config.periodic {
+            // An image node beyond a side and its partner are one column: link the image to the
+            // partner's boundary entry (`boundary` is in dense order, so a binary search finds it).
+            let columns = periodic.columns as i32;
+            for k in 0..sc.boundary.len() {
+                let node = active.nodes()[sc.boundary[k].node as usize];
+                let i = node.i.rem_euclid(columns);
+                if i == node.i {
+                    continue;
+                }
+                let Some(dense) = active.index_of(NodeId::new(i, node.j)) else { continue };
+                sc.boundary[k].partner = sc
+                    .boundary
+                    .binary_search_by_key(&(dense as u32), |b| b.node)
+                    .ok()
+                    .map(|j| j as u32);
             }
         }
         sc.boundary_of.clear();
