@@ -87,19 +87,10 @@ impl ShapeJob for PeriodicJob {
 }
 
 /// The μ(I) material of the inclined-flow case: Jop, Forterre & Pouliquen's (2006) glass beads
-/// (μ_s = tan 20.9°, μ_2 = tan 32.76°, I_0 = 0.279, d = 0.53 mm, ρ_s = 2450 kg/m³) on an elastic
-/// skeleton stiff enough that its strains stay below 1e-3 (E = 0.2 MPa).
+/// ([`MuIParams::glass_beads`]) on an elastic skeleton stiff enough that its strains stay below
+/// 1e-3 (E = 0.2 MPa).
 pub fn glass_beads() -> Result<MuI, CaseError> {
-    MuI::new(MuIParams {
-        young: 2.0e5,
-        poisson: 0.3,
-        mu_s: 20.9f64.to_radians().tan(),
-        mu_2: 32.76f64.to_radians().tan(),
-        i0: 0.279,
-        grain_diameter: 0.53e-3,
-        grain_density: 2450.0,
-    })
-    .map_err(setup)
+    MuI::new(MuIParams::glass_beads(2.0e5, 0.3)).map_err(setup)
 }
 
 /// The solid fraction of the flowing layer (Jop et al.: 0.6): bulk density φ ρ_s.

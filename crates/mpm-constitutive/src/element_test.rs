@@ -243,11 +243,35 @@ pub fn simple_shear<M: TangentModel>(
     gamma_end: f64,
     n_steps: usize,
 ) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    shear(model, sigma0, gamma_end, n_steps, QUASI_STATIC_STEP)
+}
+
+/// [`simple_shear`] at the shear rate `rate = γ̇` (1/s): each of the `n_steps` steps lasts
+/// `(gamma_end / n_steps) / rate`, for a rate-dependent model.
+pub fn simple_shear_at_rate<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    gamma_end: f64,
+    n_steps: usize,
+    rate: f64,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let dt = (gamma_end / n_steps.max(1) as f64 / rate).abs();
+    shear(model, sigma0, gamma_end, n_steps, dt)
+}
+
+/// the mixed control of [`simple_shear`] with steps of duration `dt`.
+fn shear<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    gamma_end: f64,
+    n_steps: usize,
+    dt: f64,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
     let n = n_steps.max(1) as f64;
     let control = MixedControl {
         stress_controlled: [false, true, false, false, false, false],
         increment: [0.0, 0.0, 0.0, 0.5 * gamma_end / n, 0.0, 0.0],
-        dt: QUASI_STATIC_STEP,
+        dt,
     };
     run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
 }

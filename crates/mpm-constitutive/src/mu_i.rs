@@ -66,6 +66,23 @@ pub struct MuIParams {
     pub grain_density: f64,
 }
 
+impl MuIParams {
+    /// Jop, Forterre & Pouliquen's (2006) glass beads: μ_s = tan 20.9°, μ_2 = tan 32.76°,
+    /// I_0 = 0.279, d = 0.53 mm, ρ_s = 2450 kg/m³, on an elastic skeleton (`young`, `poisson`)
+    /// that the rheology does not specify.
+    pub fn glass_beads(young: f64, poisson: f64) -> Self {
+        Self {
+            young,
+            poisson,
+            mu_s: 20.9f64.to_radians().tan(),
+            mu_2: 32.76f64.to_radians().tan(),
+            i0: 0.279,
+            grain_diameter: 0.53e-3,
+            grain_density: 2450.0,
+        }
+    }
+}
+
 /// The branches of the μ(I) update, in the order of its [`ConstitutiveModel::BRANCHES`]
 /// (`["elastic", "flowing", "separated"]`).
 pub struct MuIBranch;
@@ -289,19 +306,9 @@ impl TangentModel for MuI {
 mod tests {
     use super::*;
 
-    /// Jop et al.'s glass beads (μ_s = 0.38, μ_2 = 0.64, I_0 = 0.279, d = 0.53 mm,
-    /// ρ_s = 2450 kg/m³) on a soft elastic skeleton.
+    /// Jop et al.'s glass beads on a soft elastic skeleton.
     fn beads() -> MuI {
-        MuI::new(MuIParams {
-            young: 1.0e6,
-            poisson: 0.3,
-            mu_s: 0.382,
-            mu_2: 0.643,
-            i0: 0.279,
-            grain_diameter: 0.53e-3,
-            grain_density: 2450.0,
-        })
-        .unwrap()
+        MuI::new(MuIParams::glass_beads(1.0e6, 0.3)).unwrap()
     }
 
     /// rounding of the quadratic's root and a few products: relative 1e-12.
@@ -343,7 +350,8 @@ mod tests {
         let (mut s, mut st) = (sigma, m.initial_state());
         // a shear of 0.1 μ_s p: elastic.
         let g = m.elasticity().shear_modulus();
-        let small = SymTensor::new(0.0, 0.0, 0.0, 0.5 * 0.1 * 0.382 * 500.0 / g, 0.0, 0.0);
+        let small =
+            SymTensor::new(0.0, 0.0, 0.0, 0.5 * 0.1 * m.params().mu_s * 500.0 / g, 0.0, 0.0);
         assert_eq!(m.update(&mut s, &mut st, &small, 1e-4).unwrap(), UpdateReport::ELASTIC);
         // stretched beyond zero pressure: stress-free.
         let k = m.elasticity().bulk_modulus();
@@ -356,12 +364,13 @@ mod tests {
     #[test]
     fn without_rate_dependence_the_return_is_onto_mu_s() {
         // μ_2 = μ_s: γ̇ᵖ = R/A and τ = μ_s p for any Δt.
-        let m = MuI::new(MuIParams { mu_2: 0.382, ..*beads().params() }).unwrap();
+        let mu_s = beads().params().mu_s;
+        let m = MuI::new(MuIParams { mu_2: mu_s, ..*beads().params() }).unwrap();
         for dt in [1e-6, 1e-3, 1.0] {
             let mut s = SymTensor::IDENTITY * -500.0;
             let d_eps = SymTensor::new(0.0, 0.0, 0.0, 0.05, 0.0, 0.0);
             m.update(&mut s, &mut m.initial_state(), &d_eps, dt).unwrap();
-            assert!((s.j2().sqrt() - 0.382 * 500.0).abs() <= ROOT_REL * 500.0);
+            assert!((s.j2().sqrt() - mu_s * 500.0).abs() <= ROOT_REL * 500.0);
         }
     }
 

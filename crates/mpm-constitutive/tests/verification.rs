@@ -670,8 +670,8 @@ mod validation {
 /// τ/p = μ(I) with I = γ̇ d/√(p/ρ_s), at every rate, and the pressure never changes (no
 /// dilatancy).
 mod mu_i_element_test {
-    use mpm_constitutive::element_test::{MixedControl, run_mixed};
-    use mpm_constitutive::{ConstitutiveModel, MuI, MuIParams, SymTensor};
+    use mpm_constitutive::element_test::simple_shear_at_rate;
+    use mpm_constitutive::{MuI, MuIParams, SymTensor};
 
     /// the Newton tolerance of the held σ_yy (1e-9) and the central-difference tangent: the
     /// steady state is reached to far below this after 40 relaxation strains.
@@ -679,30 +679,14 @@ mod mu_i_element_test {
 
     #[test]
     fn steady_simple_shear_follows_mu_of_i_at_every_rate() {
-        let m = MuI::new(MuIParams {
-            young: 1.0e6,
-            poisson: 0.3,
-            mu_s: 0.382,
-            mu_2: 0.643,
-            i0: 0.279,
-            grain_diameter: 0.53e-3,
-            grain_density: 2450.0,
-        })
-        .unwrap();
+        let m = MuI::new(MuIParams::glass_beads(1.0e6, 0.3)).unwrap();
         let p = 400.0;
         let sigma0 = SymTensor::IDENTITY * -p;
         let mut ratios = Vec::new();
         // inertial numbers from 1e-4 to ~1: rates spanning four decades.
         for rate in [0.1, 1.0, 10.0, 100.0, 1000.0] {
             // γ = 0.01 in 200 steps: the elastic strain μ p/G ≈ 4e-4 builds within ~10 steps.
-            let n = 200;
-            let d_gamma = 0.01 / n as f64;
-            let control = MixedControl {
-                stress_controlled: [false, true, false, false, false, false],
-                increment: [0.0, 0.0, 0.0, 0.5 * d_gamma, 0.0, 0.0],
-                dt: d_gamma / rate,
-            };
-            let path = run_mixed(&m, sigma0, m.initial_state(), &control, n).unwrap();
+            let path = simple_shear_at_rate(&m, sigma0, 0.01, 200, rate).unwrap();
             let last = path.last().unwrap();
             let pressure = -last.stress.mean();
             assert!((pressure - p).abs() <= STEADY_REL * p, "p = {pressure}");
@@ -717,6 +701,7 @@ mod mu_i_element_test {
         }
         // rate-dependent: friction grows with the rate, between μ_s and μ_2.
         assert!(ratios.windows(2).all(|w| w[1] > w[0]));
-        assert!(ratios[0] > 0.382 && ratios[4] < 0.643);
+        let p = m.params();
+        assert!(ratios[0] > p.mu_s && ratios[4] < p.mu_2);
     }
 }

@@ -227,6 +227,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) contact_entry: Vec<AtomicU32>,
     /// Position in `boundary` of each active node under surface contact, else `u32::MAX`.
     pub(crate) boundary_of: Vec<u32>,
+    /// With periodic sides: (image, partner) dense indices of each active node beyond a side
+    /// whose partner column node is active too (built with the active set).
+    pub(crate) periodic_pairs: Vec<(u32, u32)>,
     /// m_i.
     pub(crate) mass: Vec<Real>,
     /// v_i (from P2G, then the MUSL remap).
@@ -278,6 +281,7 @@ impl<F, const N: usize> Scratch<F, N> {
             contact_start: Vec::new(),
             contact_entry: Vec::new(),
             boundary_of: Vec::new(),
+            periodic_pairs: Vec::new(),
             mass: Vec::new(),
             velocity: Vec::new(),
             force: Vec::new(),
@@ -305,7 +309,8 @@ impl<F, const N: usize> Scratch<F, N> {
                 + self.node_block.capacity()
                 + self.contact_start.capacity()
                 + self.contact_entry.capacity()
-                + self.boundary_of.capacity())
+                + self.boundary_of.capacity()
+                + 2 * self.periodic_pairs.capacity())
                 * size_of::<u32>()
             + self.base.capacity()
             + self.node_local.capacity()

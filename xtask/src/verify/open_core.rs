@@ -2,8 +2,8 @@
 //! rheology (its element test against Jop et al.'s law; steady inclined flow against Bagnold's
 //! profile).
 
-use mpm_constitutive::element_test::{MixedControl, run_mixed};
-use mpm_constitutive::{ConstitutiveModel, SymTensor};
+use mpm_constitutive::SymTensor;
+use mpm_constitutive::element_test::simple_shear_at_rate;
 use mpm_grid::RegularShape;
 use mpm_tests::open_core::{bagnold, glass_beads, periodic_block};
 
@@ -60,14 +60,8 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) -> Vec<Panel> {
     // μ(I) element test: steady simple shear at γ̇ = 10 1/s under p = 400 Pa.
     let case = "μ(I) element test, simple shear γ̇ = 10/s, p = 400 Pa";
     match glass_beads().map_err(|e| e.to_string()).and_then(|m| {
-        let (rate, p, n) = (10.0, 400.0, 200);
-        let d_gamma = 0.01 / n as f64;
-        let control = MixedControl {
-            stress_controlled: [false, true, false, false, false, false],
-            increment: [0.0, 0.0, 0.0, 0.5 * d_gamma, 0.0, 0.0],
-            dt: d_gamma / rate,
-        };
-        let path = run_mixed(&m, SymTensor::IDENTITY * -p, m.initial_state(), &control, n)
+        let (rate, p) = (10.0, 400.0);
+        let path = simple_shear_at_rate(&m, SymTensor::IDENTITY * -p, 0.01, 200, rate)
             .map_err(|e| e.to_string())?;
         let last = path.last().ok_or("empty path")?;
         let ratio = last.stress.xy.abs() / -last.stress.mean();

@@ -177,22 +177,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 }
             }
         }
+        sc.periodic_pairs.clear();
         if let Some(periodic) = self.config.periodic {
-            // An image node beyond a side and its partner are one column: link the image to the
-            // partner's boundary entry (`boundary` is in dense order, so a binary search finds it).
+            // Node columns i and i ± columns are one column: pair each image node beyond a side
+            // with its partner, when both are active.
             let columns = periodic.columns as i32;
-            for k in 0..sc.boundary.len() {
-                let node = active.nodes()[sc.boundary[k].node as usize];
+            for (image, &node) in active.nodes().iter().enumerate() {
                 let i = node.i.rem_euclid(columns);
-                if i == node.i {
-                    continue;
+                if i != node.i {
+                    if let Some(partner) = active.index_of(NodeId::new(i, node.j)) {
+                        sc.periodic_pairs.push((image as u32, partner as u32));
+                    }
                 }
-                let Some(dense) = active.index_of(NodeId::new(i, node.j)) else { continue };
-                sc.boundary[k].partner = sc
-                    .boundary
-                    .binary_search_by_key(&(dense as u32), |b| b.node)
-                    .ok()
-                    .map(|j| j as u32);
+            }
+            // Link an image's boundary entry to its partner's (`boundary` is in dense order).
+            let boundary = &mut sc.boundary;
+            for &(image, partner) in &sc.periodic_pairs {
+                let entry = |dense: u32| boundary.binary_search_by_key(&dense, |b| b.node).ok();
+                if let (Some(k), Some(j)) = (entry(image), entry(partner)) {
+                    boundary[k].partner = Some(j as u32);
+                }
             }
         }
         sc.boundary_of.clear();

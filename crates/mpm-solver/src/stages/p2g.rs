@@ -211,28 +211,21 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     *f = fs;
                 }
             });
-        if let Some(periodic) = self.config.periodic {
-            self.fold_periodic::<MASS, MOMENTUM, FORCE>(periodic.columns as i32);
+        if self.config.periodic.is_some() {
+            self.fold_periodic::<MASS, MOMENTUM, FORCE>();
         }
     }
 
     /// Periodic sides ([`crate::Periodic`]): node columns `i` and `i ± columns` are one column,
-    /// so each active image node (outside `0..columns`) and its active partner get the sums of
-    /// both: masses and forces add, a velocity formed in this pass (`MASS`) is the
-    /// mass-weighted mean, and a remapped one (divided by the shared mass already) adds. A
-    /// partner no particle reaches has nothing to add. Serial over the nodes: only periodic
-    /// scenes pay for it.
-    fn fold_periodic<const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
-        &mut self,
-        columns: i32,
-    ) {
+    /// so each active image node (outside `0..columns`) and its active partner
+    /// (`scratch.periodic_pairs`) get the sums of both: masses and forces add, a velocity formed
+    /// in this pass (`MASS`) is the mass-weighted mean, and a remapped one (divided by the
+    /// shared mass already) adds. A partner no particle reaches has nothing to add. Serial over
+    /// the pairs: only periodic scenes pay for it.
+    fn fold_periodic<const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(&mut self) {
         let sc = &mut self.scratch;
-        for (a, &node) in sc.active.nodes().iter().enumerate() {
-            let i = node.i.rem_euclid(columns);
-            if i == node.i {
-                continue;
-            }
-            let Some(b) = sc.active.index_of(NodeId::new(i, node.j)) else { continue };
+        for &(a, b) in &sc.periodic_pairs {
+            let (a, b) = (a as usize, b as usize);
             if MASS {
                 let (ma, mb) = (sc.mass[a], sc.mass[b]);
                 let m = ma + mb;

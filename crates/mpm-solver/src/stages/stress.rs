@@ -51,10 +51,10 @@ impl Default for ChunkTally {
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// updates every particle's stress, state and volume over `dt` from the nodal velocities in
     /// `scratch.velocity` (P2G, remapped or v^L, as the scheme arranged); returns how many
-    /// particles took each branch of their model. With `last`, this is the step's last particle loop: positions and
-    /// velocities are final, and once a particle's old gradients are used it also computes the
-    /// particle's stencil for the next step (which `locate` then need not recompute) and its
-    /// signal for the next time step (`timestep.rs`).
+    /// particles took each branch of their model. With `last`, this is the step's last particle
+    /// loop: positions and velocities are final, and once a particle's old gradients are used it
+    /// also computes the particle's stencil for the next step (which `locate` then need not
+    /// recompute) and its signal for the next time step (`timestep.rs`).
     pub(crate) fn update_stress(
         &mut self,
         dt: Real,
