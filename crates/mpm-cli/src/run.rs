@@ -425,7 +425,7 @@ impl Job for RunJob<'_> {
         let (mut solver, history, fresh) = match self.resume {
             None => {
                 let particles = dispatch::particles(&r.seeds, &materials);
-                let s = Solver::new(shape, materials, particles, r.config)
+                let s = Solver::new(shape, materials, particles, r.config.clone())
                     .map_err(|e| setup_error(scene, &e.to_string()))?;
                 (s, History { dt_min: f64::INFINITY, ..History::default() }, true)
             }
@@ -437,7 +437,7 @@ impl Job for RunJob<'_> {
                         reason: "its material model does not match its scene".into(),
                     });
                 };
-                let s = Solver::from_checkpoint(shape, materials, r.config, c)
+                let s = Solver::from_checkpoint(shape, materials, r.config.clone(), c)
                     .map_err(|e| setup_error(scene, &e.to_string()))?;
                 (s, history, false)
             }

@@ -54,6 +54,32 @@ pub enum ContactError {
         /// the angle as given, degrees.
         angle_deg: f64,
     },
+    /// a point of a wall is NaN or infinite.
+    #[error("wall through {point}: the point is not finite")]
+    NonFinitePoint {
+        /// the point as given.
+        point: Vector,
+    },
+    /// a wall segment's two ends coincide, so it has no direction.
+    #[error(
+        "wall segment from {from} to {to}: the two ends coincide (or are too far apart to measure)"
+    )]
+    DegenerateSegment {
+        /// the segment's first end.
+        from: Vector,
+        /// the segment's second end.
+        to: Vector,
+    },
+    /// the thickness of a wall's solid is zero, negative or NaN.
+    #[error("wall segment from {from} to {to}: thickness {thickness} m must be positive")]
+    InvalidThickness {
+        /// the segment's first end.
+        from: Vector,
+        /// the segment's second end.
+        to: Vector,
+        /// the thickness as given, m.
+        thickness: f64,
+    },
     /// the time step is zero, negative, NaN or infinite.
     #[error("contact step: time step dt = {dt} s must be finite and positive")]
     InvalidTimeStep {

@@ -4,6 +4,8 @@
 //! The crate works on one grid node at a time: its mass, its start-of-step velocity, its trial
 //! acceleration f/m, and the boundaries it lies on. It knows nothing of particles, materials or the
 //! grid's geometry.
+//! A [`Wall`] places a boundary: a plane through a point or a segment of one, at any position and
+//! angle, with the rule that says which material points touch it.
 //! [`RigidSlide`] is the law's analytic reference: a rigid block sliding on one plane (eqs 21–22).
 //!
 //! ```
@@ -77,6 +79,7 @@ mod corner;
 mod error;
 mod node_law;
 mod sliding;
+mod wall;
 
 /// The vector type of the crate: a 2D f64 vector (x, y), SI units.
 pub type Vector = glam::DVec2;
@@ -86,3 +89,4 @@ pub use corner::{FEASIBILITY_TOLERANCE, apply_all, constrain_velocity_all, try_a
 pub use error::ContactError;
 pub use node_law::{ContactOutcome, ContactStatus};
 pub use sliding::RigidSlide;
+pub use wall::{TOUCH_TOLERANCE, Wall};

@@ -213,7 +213,7 @@ pub struct BodySpec {
 }
 
 /// `[boundaries]`: absent entries are open (no boundary condition).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoundariesSpec {
     /// the ground (terrain) or floor (regular grid).
@@ -229,6 +229,27 @@ pub struct BoundariesSpec {
     /// material leaving through one side enters through the other. Default false.
     #[serde(default)]
     pub periodic: bool,
+    /// `[[boundaries.walls]]`: walls anywhere (inclined, inside the domain), beside the grid's sides.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walls: Vec<WallSpec>,
+}
+
+/// One `[[boundaries.walls]]` entry: a straight wall from `from` to `to`, the material on its left
+/// (walking from `from` to `to`), with a friction law and an optional solid thickness behind it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// one end `[x, y]` (m).
+    #[serde(deserialize_with = "exact::required_pair")]
+    pub from: [f64; 2],
+    /// the other end `[x, y]` (m).
+    #[serde(deserialize_with = "exact::required_pair")]
+    pub to: [f64; 2],
+    /// the friction law, as for the ground.
+    pub law: BoundarySpec,
+    /// depth of the solid behind the face (m); default: the whole half-plane behind the segment.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
 }
 
 /// One boundary's law: `{ friction = μ }`, `{ friction_angle_deg = φ_b }`, `"rough"`, `"fixed"`
@@ -624,6 +645,13 @@ mod exact {
         d: D,
     ) -> Result<Option<[T; 2]>, D::Error> {
         Ok(Option::<Two<T>>::deserialize(d)?.map(|t| t.0))
+    }
+
+    /// a required `[a, b]`.
+    pub fn required_pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<[T; 2], D::Error> {
+        Ok(Two::<T>::deserialize(d)?.0)
     }
 
     /// an optional list of `[a, b]`.

@@ -2,7 +2,7 @@
 
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use mpm_contact::Friction;
+use mpm_contact::{Friction, Wall};
 use serde::{Deserialize, Serialize};
 
 /// The order in which a step updates stress relative to the grid solve (SPEC §1, paper §4).
@@ -108,7 +108,7 @@ pub struct Boundaries {
 }
 
 impl Boundaries {
-    /// true when at least one boundary is declared.
+    /// true when at least one of the grid's sides is a boundary.
     pub fn any(&self) -> bool {
         self.ground.is_some() || self.left_wall.is_some() || self.right_wall.is_some()
     }
@@ -129,7 +129,7 @@ pub struct Periodic {
 }
 
 /// Settings of a run.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverConfig {
     /// Update scheme.
     pub scheme: Scheme,
@@ -142,6 +142,12 @@ pub struct SolverConfig {
     /// A periodic pair of sides in x (`None`: the sides are walls or open).
     #[serde(default)]
     pub periodic: Option<Periodic>,
+    /// Walls anywhere, beside the grid's own sides: planes or segments at any position and angle
+    /// (an inclined retaining wall, a check dam inside the domain). Under [`Contact::Surface`] a
+    /// wall holds the nodes near it where material touches it, under [`Contact::Node`] the nodes
+    /// on its face or inside its solid (see `stages/locate.rs`).
+    #[serde(default)]
+    pub walls: Vec<Wall>,
     /// Nodes whose mass is below this fraction of the mean particle mass take no acceleration from
     /// internal force (the small-nodal-mass instability of §2(3)). Default 1e-4, which leaves
     /// MUSL and USAVG runs unchanged (their strains use remapped velocities). USL needs about 1e-2
@@ -169,6 +175,7 @@ impl Default for SolverConfig {
             gravity: Vector::new(0.0, -STANDARD_GRAVITY),
             boundaries: Boundaries::default(),
             periodic: None,
+            walls: Vec::new(),
             small_mass_ratio: 1e-4,
             objective_stress: false,
             gravity_ramp: 0.0,
@@ -252,6 +259,13 @@ impl SolverConfig {
                     name: "periodic",
                     value: p.length,
                     expected: "periodic sides without left or right walls",
+                });
+            }
+            if !self.walls.is_empty() {
+                return Err(SolverError::InvalidSetting {
+                    name: "walls",
+                    value: self.walls.len() as f64,
+                    expected: "no walls beside periodic sides (not supported yet)",
                 });
             }
         }

@@ -62,6 +62,10 @@ pub struct Dissipation {
     pub constraint: Real,
     /// External work of time-varying loads over all steps (not a dissipation: an input).
     pub external: Real,
+    /// Impulse the boundaries gave the material over all steps (N·s per m of thickness): with
+    /// gravity's, it is the change of the material's momentum (a check of conservation).
+    #[serde(default)]
+    pub impulse: Vector,
 }
 
 /// The size of a run's energy error, judged against the energy the run can move around.

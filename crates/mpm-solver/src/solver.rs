@@ -18,7 +18,7 @@ use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU32};
 
 use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor};
-use mpm_contact::Boundary;
+use mpm_contact::{Boundary, Wall};
 use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
 use serde::{Deserialize, Serialize};
 
@@ -135,22 +135,38 @@ pub struct Checkpoint<St> {
     pub reference_density: Vec<Real>,
 }
 
-/// A boundary node: its dense index and the (up to three) planes it lies on.
+/// A node that a boundary may hold: its dense index and the planes near it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoundaryNode {
     pub(crate) node: u32,
-    pub(crate) count: u8,
-    pub(crate) planes: [Boundary; 3],
-    /// A point of each plane: the node itself, or for a ghost node the midpoint between it and
-    /// its image.
-    pub(crate) points: [Vector; 3],
-    /// Bit k is set while plane k holds the node (see [`crate::Contact`]); set every step.
-    pub(crate) touching: u8,
+    /// Its planes are `Scratch::node_planes[first..first + count]`: the grid's sides through it
+    /// first, then the walls near it.
+    pub(crate) first: u32,
+    pub(crate) count: u32,
     /// For a ghost node of a wide stencil: its image across the plane.
     pub(crate) mirror: Option<Mirror>,
     /// With periodic sides, for an image node beyond a side: the index in `Scratch::boundary`
     /// of its partner (the same column of nodes), which books the pair's boundary work.
     pub(crate) partner: Option<u32>,
+}
+
+impl BoundaryNode {
+    /// the range of its planes in `Scratch::node_planes`.
+    pub(crate) fn planes(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.count) as usize
+    }
+}
+
+/// One plane near a boundary node, placed as a [`Wall`]: a grid side passes through the node (or,
+/// for a ghost node, halfway to its image), a declared wall lies wherever the scene put it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct NodePlane {
+    pub(crate) wall: Wall,
+    /// The plane holds the node whatever the material does: a `Fixed` plane, or any plane under
+    /// [`crate::Contact::Node`], with the node on its face or inside its solid.
+    pub(crate) always: bool,
+    /// The plane holds the node during the coming step (see [`crate::Contact`]); set every step.
+    pub(crate) held: bool,
 }
 
 /// The mirror image of a ghost node (a node outside the grid, reached by wide stencils) across a
@@ -239,8 +255,12 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// a_i after boundary conditions. The end-of-step velocity is never stored: it is
     /// v_i^L = v_i + a_i Δt (eq 5), an identity the contact layer keeps at boundary nodes too.
     pub(crate) acceleration: Vec<Vector>,
-    /// Nodes on a declared boundary.
+    /// Nodes on a declared boundary or near a wall.
     pub(crate) boundary: Vec<BoundaryNode>,
+    /// The planes of the boundary nodes (`BoundaryNode::planes`).
+    pub(crate) node_planes: Vec<NodePlane>,
+    /// The planes holding one node, gathered for the contact law (reused).
+    pub(crate) plane_buf: Vec<Boundary>,
     /// The arrays below `first_node` describe the current `first_node` (false before the first
     /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
@@ -287,6 +307,8 @@ impl<F, const N: usize> Scratch<F, N> {
             force: Vec::new(),
             acceleration: Vec::new(),
             boundary: Vec::new(),
+            node_planes: Vec::new(),
+            plane_buf: Vec::new(),
             located: false,
             stencils_ahead: None,
             saved: Vec::new(),
@@ -322,6 +344,8 @@ impl<F, const N: usize> Scratch<F, N> {
             + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
+            + self.node_planes.capacity() * size_of::<NodePlane>()
+            + self.plane_buf.capacity() * size_of::<Boundary>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
     }
 }
@@ -445,6 +469,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Transfer::Flip => particles.affine = Vec::new(),
         }
         validate_particles(&particles, materials.len())?;
+        if checkpoint.step == 0 {
+            outside_walls(&particles, &config.walls)?;
+        }
         let mean_mass = particles.total_mass() / particles.len() as Real;
         let cell_size = shape.min_cell_size();
         let p_modulus: Vec<Real> =
@@ -454,6 +481,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // A material no particle uses has no reference: no cap (its true signal counts).
         let signal_cap =
             p_modulus.iter().zip(&reference_density).map(|(m, r)| signal_cap(*m, *r)).collect();
+        let small_mass = config.small_mass_ratio * mean_mass;
         let mut solver = Self {
             shape,
             materials,
@@ -463,7 +491,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             step: checkpoint.step,
             dissipation: checkpoint.dissipation,
             initial_stored: checkpoint.initial_stored,
-            small_mass: config.small_mass_ratio * mean_mass,
+            small_mass,
             cell_size,
             p_modulus,
             reference_density,
@@ -537,6 +565,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// simulated time (s).
     pub fn time(&self) -> Real {
         self.time
+    }
+
+    /// the impulse the boundaries (grid sides and walls) gave the material since the start
+    /// (N·s per m of thickness): the change of its momentum is this plus gravity's impulse.
+    pub fn boundary_impulse(&self) -> Vector {
+        self.dissipation.impulse
     }
 
     /// steps completed.
@@ -825,6 +859,27 @@ fn reference_density<St>(
         });
     }
     Ok(saved)
+}
+
+/// refuses a new run with a particle inside a wall's solid: the wall would push it out through
+/// the material in the first steps (a scene error, not physics).
+fn outside_walls<St>(p: &Particles<St>, walls: &[Wall]) -> Result<(), SolverError> {
+    for (k, wall) in walls.iter().enumerate() {
+        if let Some(i) = p.position.iter().position(|&x| wall.contains(x)) {
+            return Err(SolverError::InvalidParticle {
+                particle: i,
+                position: p.position[i],
+                reason: format!(
+                    "inside the solid of wall {k} (face through ({}, {}), normal ({}, {}))",
+                    wall.point().x,
+                    wall.point().y,
+                    wall.normal().x,
+                    wall.normal().y
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), SolverError> {

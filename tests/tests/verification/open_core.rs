@@ -34,3 +34,32 @@ fn steady_mu_i_flow_down_a_periodic_slope_has_bagnolds_profile() {
     assert!(r.change <= BAGNOLD_REL, "not steady: {:e}", r.change);
     assert!(r.worst <= BAGNOLD_REL, "worst {:.4}", r.worst);
 }
+
+/// The obstacle: no gravity and the small-mass rule off, so the wall's impulse is the only
+/// force; the balance is rounding of ~14 000 steps' sums (1e-12 relative, measured 1e-15).
+const OBSTACLE_REL: f64 = 1e-12;
+
+#[test]
+fn a_block_thrown_into_an_inclined_check_dam_rebounds_without_entering_it() {
+    use mpm_contact::{Friction, TOUCH_TOLERANCE};
+    use mpm_tests::open_core::obstacle;
+    for kind in [RegularShape::Bilinear, RegularShape::BSpline] {
+        for mu in [0.0, 0.3] {
+            let r = obstacle(kind, Friction::Coulomb { mu }).unwrap();
+            let what = format!("{kind:?}, μ = {mu}");
+            assert!(r.balance <= OBSTACLE_REL, "{what}: balance {:e}", r.balance);
+            // the wall pushed the block back: its approach (−1.92 m/s) is stopped
+            assert!(r.normal_change > 1.0 && r.normal_velocity_end >= 0.0, "{what}: {r:?}");
+            // no particle's edge passes the face by more than the touching rule allows
+            assert!(r.closest_edge >= -TOUCH_TOLERANCE, "{what}: {}", r.closest_edge);
+            assert_eq!(r.inside, 0, "{what}");
+            if mu == 0.0 {
+                assert!(r.tangential_change.abs() <= OBSTACLE_REL, "{what}: {r:?}");
+            } else {
+                // friction slowed the slide along the wall, within the Coulomb bound
+                let (t, n) = (r.tangential_change, r.normal_change);
+                assert!(t < -1e-3 && -t <= mu * n, "{what}: Δp_t {t}, Δp_n {n}");
+            }
+        }
+    }
+}

@@ -1,12 +1,12 @@
 //! `[boundaries]`: the Coulomb node boundaries (eqs 14–18) of the ground and the walls.
 
-use mpm_contact::{Boundary, ContactError, Friction};
+use mpm_contact::{Boundary, ContactError, Friction, Wall};
 use mpm_solver::{Boundaries, Periodic, Vector};
 
 use super::Ctx;
 use crate::error::SceneError;
-use crate::file::{BoundarySpec, SceneFile};
-use crate::scene::GridBuilt;
+use crate::file::{BoundarySpec, SceneFile, WallSpec};
+use crate::scene::{GridBuilt, Seed};
 
 /// `periodic = true`: the regular grid's sides as a periodic pair; refused on a terrain grid
 /// (its columns follow the ground, so its sides do not match) and beside a side wall.
@@ -53,7 +53,7 @@ pub(super) fn periodic(
     }))
 }
 
-/// The friction law of each declared boundary.
+/// The friction law of each declared side of the grid.
 pub(super) fn build(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Boundaries, SceneError> {
     let mut boundaries = Boundaries::default();
     for (name, spec, slot) in [
@@ -62,21 +62,89 @@ pub(super) fn build(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Boundaries, SceneErr
         ("right_wall", f.boundaries.right_wall, &mut boundaries.right_wall),
     ] {
         let Some(spec) = spec else { continue };
-        let path = format!("boundaries.{name}");
-        let friction = match spec {
-            BoundarySpec::Friction(mu) => Boundary::new(Vector::Y, Friction::Coulomb { mu })
-                .map_err(|e| contact_error(ctx, &format!("{path}.friction"), e))?
-                .friction(),
-            BoundarySpec::FrictionAngleDeg(a) => Boundary::with_friction_angle_deg(Vector::Y, a)
-                .map_err(|e| contact_error(ctx, &format!("{path}.friction_angle_deg"), e))?
-                .friction(),
-            BoundarySpec::Rough => Friction::Rough,
-            BoundarySpec::Fixed => Friction::Fixed,
-            BoundarySpec::Frictionless => Friction::Coulomb { mu: 0.0 },
-        };
-        *slot = Some(friction);
+        *slot = Some(friction(ctx, &format!("boundaries.{name}"), spec)?);
     }
     Ok(boundaries)
+}
+
+/// `[[boundaries.walls]]`: each wall as the solver takes it; refused beside periodic sides, and
+/// when a body's particle starts inside a wall's solid.
+pub(super) fn walls(ctx: &Ctx<'_>, f: &SceneFile, seeds: &[Seed]) -> Result<Vec<Wall>, SceneError> {
+    let specs = &f.boundaries.walls;
+    if f.boundaries.periodic && !specs.is_empty() {
+        return Err(ctx.err(
+            "boundaries.walls",
+            None,
+            "walls beside periodic sides are not supported yet",
+            "either `periodic = true` or `[[boundaries.walls]]`",
+            "remove the walls or the periodic sides",
+        ));
+    }
+    let walls: Vec<Wall> = specs
+        .iter()
+        .enumerate()
+        .map(|(k, w)| wall(ctx, &format!("boundaries.walls[{k}]"), w))
+        .collect::<Result<_, _>>()?;
+    for (k, w) in walls.iter().enumerate() {
+        if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
+            return Err(ctx.err(
+                &format!("bodies[{}]", s.body),
+                None,
+                format!(
+                    "this body starts inside boundaries.walls[{k}] (a particle at ({}, {}) lies \
+                     behind its face)",
+                    s.position.x, s.position.y
+                ),
+                "bodies in front of every wall (on the left walking from `from` to `to`)",
+                "move the body, or swap the wall's `from` and `to` if it faces the wrong way",
+            ));
+        }
+    }
+    Ok(walls)
+}
+
+fn wall(ctx: &Ctx<'_>, path: &str, w: &WallSpec) -> Result<Wall, SceneError> {
+    let law = friction(ctx, &format!("{path}.law"), w.law)?;
+    let thickness = w.thickness.unwrap_or(f64::INFINITY);
+    let [from, to] = [w.from, w.to].map(|p| Vector::new(p[0], p[1]));
+    Wall::segment(from, to, law, thickness).map_err(|e| match e {
+        ContactError::InvalidThickness { thickness, .. } => ctx.range(
+            &format!("{path}.thickness"),
+            thickness,
+            "thickness > 0 (m)",
+            "give the depth of the wall's solid, or leave it out for a solid all the way behind",
+        ),
+        ContactError::DegenerateSegment { .. } => ctx.err(
+            &format!("{path}.to"),
+            Some(format!("[{}, {}]", w.to[0], w.to[1])),
+            "the wall's two ends coincide",
+            "two distinct, finite points",
+            "give the wall's other end",
+        ),
+        ContactError::NonFinitePoint { .. } => ctx.err(
+            &format!("{path}.from"),
+            None,
+            "a wall end is not finite",
+            "finite coordinates (m)",
+            "give finite numbers",
+        ),
+        other => contact_error(ctx, path, other),
+    })
+}
+
+/// a friction law, validated with the contact layer's own rules.
+fn friction(ctx: &Ctx<'_>, path: &str, spec: BoundarySpec) -> Result<Friction, SceneError> {
+    Ok(match spec {
+        BoundarySpec::Friction(mu) => Boundary::new(Vector::Y, Friction::Coulomb { mu })
+            .map_err(|e| contact_error(ctx, &format!("{path}.friction"), e))?
+            .friction(),
+        BoundarySpec::FrictionAngleDeg(a) => Boundary::with_friction_angle_deg(Vector::Y, a)
+            .map_err(|e| contact_error(ctx, &format!("{path}.friction_angle_deg"), e))?
+            .friction(),
+        BoundarySpec::Rough => Friction::Rough,
+        BoundarySpec::Fixed => Friction::Fixed,
+        BoundarySpec::Frictionless => Friction::Coulomb { mu: 0.0 },
+    })
 }
 
 fn contact_error(ctx: &Ctx<'_>, path: &str, e: ContactError) -> SceneError {

@@ -239,7 +239,8 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
     let boundaries = boundaries::build(ctx, f)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
-    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, kind)?;
+    let walls = boundaries::walls(ctx, f, &seeds)?;
+    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, kind)?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;

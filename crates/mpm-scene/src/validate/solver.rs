@@ -1,5 +1,6 @@
 //! `[solver]`: scheme, time step, gravity, thresholds, and the first Δt (eq 13).
 
+use mpm_contact::Wall;
 use mpm_solver::{
     Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
 };
@@ -141,6 +142,7 @@ pub(super) fn config(
     settings: &Settings,
     boundaries: Boundaries,
     periodic: Option<Periodic>,
+    walls: Vec<Wall>,
     kind: MaterialKind,
 ) -> Result<SolverConfig, SceneError> {
     let config = SolverConfig {
@@ -149,6 +151,7 @@ pub(super) fn config(
         gravity: settings.gravity,
         boundaries,
         periodic,
+        walls,
         small_mass_ratio: settings.small_mass_ratio,
         objective_stress: s.objective_stress.unwrap_or(kind == MaterialKind::DruckerPrager),
         gravity_ramp: settings.gravity_ramp,

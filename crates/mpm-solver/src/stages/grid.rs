@@ -11,7 +11,7 @@
 //! [`Contact::Node`] (the paper's rule) always.
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_contact::{Friction, apply_all, constrain_velocity_all};
+use mpm_contact::{Boundary, Friction, apply_all, constrain_velocity_all};
 use mpm_grid::ShapeFunctions;
 use std::sync::atomic::Ordering;
 
@@ -19,35 +19,23 @@ use rayon::prelude::*;
 
 use crate::config::Contact;
 use crate::math::{Real, Vector};
-use crate::solver::Solver;
+use crate::solver::{NodePlane, Solver};
 
-/// A plane holds a node when the gap between it and the nearest particle of the node's support is
-/// at most this fraction of that particle's half-size: a particle resting on the plane, whose gap
-/// is zero up to rounding, stays in contact.
-const TOUCH_TOLERANCE: Real = 0.01;
-
-/// the planes of `planes` whose bit is set in `mask`, packed at the front; returns them and
-/// their count.
-fn select<T: Copy>(planes: &[T; 3], count: u8, mask: u8) -> ([T; 3], usize) {
-    let mut out = *planes;
-    let mut n = 0;
-    for (k, plane) in planes.iter().enumerate().take(usize::from(count)) {
-        if mask & (1 << k) != 0 {
-            out[n] = *plane;
-            n += 1;
-        }
-    }
-    (out, n)
+/// the planes of `planes` that hold their node this step, gathered into `buf` for the contact law.
+fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {
+    buf.clear();
+    buf.extend(planes.iter().filter(|p| p.held).map(|p| *p.wall.boundary()));
+    buf
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// decides which planes hold each boundary node during the coming step (see [`Contact`]).
     ///
-    /// Under [`Contact::Surface`] plane k holds node i when some particle p of the node's support
-    /// has a gap (x_p − x_k)·n_k − r_p + Δt·min(v_p·n_k, 0) ≤ 0.01 r_p, with x_k a point of the
-    /// plane, n_k its normal into the material and r_p = ½√V_p the particle's half-size: the
-    /// particle's edge touches the plane now or would cross it within the step. `Fixed` planes
-    /// hold always (they glue the material in both directions).
+    /// A plane marked `always` (a `Fixed` plane, or any plane under [`Contact::Node`], with the
+    /// node on its face or inside its solid) holds it; otherwise, under [`Contact::Surface`],
+    /// plane k holds node i when some particle p of the node's support touches it
+    /// ([`mpm_contact::Wall::touches`]): its edge, at half-size r_p = ½√V_p, is on the face
+    /// within 0.01 r_p or would cross it within the step.
     pub(crate) fn detect_contact(&mut self, dt: Real) {
         let sc = &mut self.scratch;
         if sc.boundary.is_empty() {
@@ -55,39 +43,28 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let p = &self.particles;
         let surface = self.config.contact == Contact::Surface;
-        for (j, b) in sc.boundary.iter_mut().enumerate() {
-            let all = (1u8 << b.count) - 1;
-            if !surface {
-                b.touching = all;
-                continue;
+        for (j, b) in sc.boundary.iter().enumerate() {
+            let list = || {
+                &sc.contact_entry[sc.contact_start[j] as usize..sc.contact_start[j + 1] as usize]
+            };
+            for plane in &mut sc.node_planes[b.planes()] {
+                plane.held = plane.always
+                    || surface
+                        && list().iter().any(|e| {
+                            let q = e.load(Ordering::Relaxed) as usize / N;
+                            let r = 0.5 * p.volume[q].sqrt();
+                            plane.wall.touches(p.position[q], r, p.velocity[q], dt)
+                        });
             }
-            let list =
-                &sc.contact_entry[sc.contact_start[j] as usize..sc.contact_start[j + 1] as usize];
-            let mut touching = 0;
-            for k in 0..usize::from(b.count) {
-                let (plane, point) = (&b.planes[k], b.points[k]);
-                let n = plane.normal();
-                let held = plane.friction() == Friction::Fixed
-                    || list.iter().any(|e| {
-                        let e = e.load(Ordering::Relaxed);
-                        let q = e as usize / N;
-                        let r = 0.5 * p.volume[q].sqrt();
-                        let gap =
-                            (p.position[q] - point).dot(n) - r + dt * p.velocity[q].dot(n).min(0.0);
-                        gap <= TOUCH_TOLERANCE * r
-                    });
-                if held {
-                    touching |= 1 << k;
-                }
-            }
-            b.touching = touching;
         }
         // A periodic image and its partner are one column: held when either is.
         for j in 0..sc.boundary.len() {
             if let Some(k) = sc.boundary[j].partner {
-                let k = k as usize;
-                let both = sc.boundary[j].touching | sc.boundary[k].touching;
-                (sc.boundary[j].touching, sc.boundary[k].touching) = (both, both);
+                let (image, partner) = (sc.boundary[j].planes(), sc.boundary[k as usize].planes());
+                for (a, b) in image.zip(partner) {
+                    let both = sc.node_planes[a].held | sc.node_planes[b].held;
+                    (sc.node_planes[a].held, sc.node_planes[b].held) = (both, both);
+                }
             }
         }
     }
@@ -105,16 +82,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 *a = if m > small { f / m } else { g };
             });
 
-        let (mut friction, mut constraint) = (0.0, 0.0);
+        let (mut friction, mut constraint, mut impulse) = (0.0, 0.0, Vector::ZERO);
         let surface = self.config.contact == Contact::Surface;
         sc.held.clear();
         for b in &sc.boundary {
             let i = b.node as usize;
-            let (planes, count) = select(&b.planes, b.count, b.touching);
-            if count == 0 {
+            let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
+            if planes.is_empty() {
                 continue;
             }
-            let planes = &planes[..count];
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
             let wall = match b.mirror {
@@ -153,14 +129,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // a periodic image: its partner, holding the same sums, books the pair's work.
                 continue;
             }
+            impulse += out.impulse;
             let mean_v = 0.5 * (v_rel + out.velocity);
-            let n = b.planes[0].normal();
+            let n = sc.node_planes[b.first as usize].wall.normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));
             constraint -= jn * vn;
             friction -= out.impulse.dot(mean_v) - jn * vn;
         }
         self.dissipation.friction += friction;
         self.dissipation.constraint += constraint;
+        self.dissipation.impulse += impulse;
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
@@ -188,11 +166,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         for b in &sc.boundary {
             let i = b.node as usize;
-            let (planes, count) = select(&b.planes, b.count, b.touching);
-            if count == 0 {
+            let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
+            if planes.is_empty() {
                 continue;
             }
-            let planes = &planes[..count];
             let wall = match b.mirror {
                 Some(m) if m.fixed => {
                     sc.velocity[i] = -sc.velocity[m.image as usize];
@@ -251,7 +228,7 @@ mod tests {
         let mut s = on_floor(&[(Vector::new(0.5, y), Vector::new(0.0, vy), 1000.0)], contact);
         s.detect_contact(dt);
         assert_eq!(s.scratch.boundary.len(), 2, "the particle's two floor nodes");
-        s.scratch.boundary.iter().filter(|b| b.touching != 0).count()
+        s.scratch.node_planes.iter().filter(|p| p.held).count()
     }
 
     #[test]

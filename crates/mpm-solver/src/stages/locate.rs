@@ -9,15 +9,15 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_contact::{Boundary, Friction};
+use mpm_contact::{Friction, Wall};
 use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
-use crate::config::Contact;
+use crate::config::{Boundaries, Contact};
 use crate::error::SolverError;
 use crate::math::Vector;
 use crate::par::{chunk_len, counting_sort};
-use crate::solver::{BoundaryNode, Mirror, Scratch, Solver};
+use crate::solver::{BoundaryNode, Mirror, NodePlane, Scratch, Solver};
 use crate::stages::p2g::patch_side;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -123,60 +123,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         sc.mass.resize(nodes, 0.0);
 
-        sc.boundary.clear();
-        let b = self.config.boundaries;
-        let periodic = self.config.periodic.is_some();
-        if b.any() {
-            for (i, &node) in active.nodes().iter().enumerate() {
-                let normals = shape.boundary_normals(node);
-                let mut planes: [Option<Boundary>; 3] = [None; 3];
-                let mut count = 0;
-                for (law, normal) in [
-                    (b.ground, normals.ground),
-                    (b.left_wall, normals.left_wall),
-                    (b.right_wall, normals.right_wall),
-                ] {
-                    if let (Some(law), Some(normal)) = (law, normal) {
-                        // The grid hands out unit normals and the friction law was validated
-                        // with the scene, so construction cannot fail here.
-                        if let Ok(plane) = Boundary::new(normal, law) {
-                            planes[count] = Some(plane);
-                            count += 1;
-                        }
-                    }
-                }
-                if let Some(first) = planes[0] {
-                    let here = shape.node_position(node);
-                    let mut points = [here; 3];
-                    // (periodic sides are no mirror planes: their ghosts are image nodes)
-                    let across_side = |normal: Vector| periodic && normal.x != 0.0;
-                    let mirror = shape.mirror(node).filter(|&(_, n)| !across_side(n));
-                    let mirror = mirror.and_then(|(image, normal)| {
-                        let fixed = planes
-                            .iter()
-                            .flatten()
-                            .any(|p| p.normal() == normal && p.friction() == Friction::Fixed);
-                        // The mirror plane lies halfway between the ghost and its image.
-                        let middle = 0.5 * (here + shape.node_position(image));
-                        for (point, plane) in points.iter_mut().zip(&planes) {
-                            if plane.is_some_and(|p| p.normal() == normal) {
-                                *point = middle;
-                            }
-                        }
-                        active.index_of(image).map(|j| Mirror { image: j as u32, normal, fixed })
-                    });
-                    sc.boundary.push(BoundaryNode {
-                        node: i as u32,
-                        count: count as u8,
-                        planes: planes.map(|b| b.unwrap_or(first)),
-                        points,
-                        touching: 0,
-                        mirror,
-                        partner: None,
-                    });
-                }
-            }
-        }
+        boundary_nodes(
+            sc,
+            shape,
+            self.config.boundaries,
+            &self.config.walls,
+            self.config.contact,
+            self.config.periodic.is_some(),
+            &self.particles.volume,
+        );
+        let active = &sc.active;
         sc.periodic_pairs.clear();
         if let Some(periodic) = self.config.periodic {
             // Node columns i and i ± columns are one column: pair each image node beyond a side
@@ -210,6 +166,116 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         debug_assert!(binned, "every active node is some stencil's node");
         Ok(())
     }
+}
+
+/// lists the active nodes a boundary may hold, with their planes: the grid's sides through each node
+/// on one (a ghost node's plane halfway to its image), then every wall the node is near.
+///
+/// A wall holds the nodes of a material point that touches it ([`Wall::touches`]), so the nodes
+/// watched are those within `reach` of its face, span or solid: how far a touching point can be
+/// from a node of its stencil. That is at most (stencil side / 2) cell diagonals, plus the point's
+/// half-size (its edge touches, not its centre) and the step's travel (≤ one cell at C ≤ 1): taken
+/// as (side / 2 + 1) times the longest diagonal of an active cell plus the largest half-size.
+#[allow(clippy::too_many_arguments)]
+fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
+    sc: &mut Scratch<F, N>,
+    shape: &S,
+    sides: Boundaries,
+    walls: &[Wall],
+    contact: Contact,
+    periodic: bool,
+    volume: &[f64],
+) {
+    sc.boundary.clear();
+    sc.node_planes.clear();
+    if !sides.any() && walls.is_empty() {
+        return;
+    }
+    let active = &sc.active;
+    let reach = if walls.is_empty() { 0.0 } else { wall_reach(active, shape, volume, N) };
+    let hold_always = |wall: &Wall, here: Vector| {
+        (contact == Contact::Node || wall.boundary().friction() == Friction::Fixed)
+            && wall.holds_node(here)
+    };
+    for (i, &node) in active.nodes().iter().enumerate() {
+        let here = shape.node_position(node);
+        let first = sc.node_planes.len();
+        let normals = shape.boundary_normals(node);
+        for (law, normal) in [
+            (sides.ground, normals.ground),
+            (sides.left_wall, normals.left_wall),
+            (sides.right_wall, normals.right_wall),
+        ] {
+            if let (Some(law), Some(normal)) = (law, normal) {
+                // The grid hands out unit normals and the friction law was validated with the
+                // scene, so construction cannot fail here.
+                if let Ok(wall) = Wall::plane(here, normal, law) {
+                    sc.node_planes.push(NodePlane { wall, always: false, held: false });
+                }
+            }
+        }
+        let on_sides = &mut sc.node_planes[first..];
+        // (periodic sides are no mirror planes: their ghosts are image nodes)
+        let across_side = |normal: Vector| periodic && normal.x != 0.0;
+        let mirror = (!on_sides.is_empty()).then(|| shape.mirror(node)).flatten();
+        let mirror = mirror.filter(|&(_, n)| !across_side(n));
+        let mirror = mirror.and_then(|(image, normal)| {
+            let fixed = on_sides.iter().any(|p| {
+                p.wall.normal() == normal && p.wall.boundary().friction() == Friction::Fixed
+            });
+            // The mirror plane lies halfway between the ghost and its image.
+            let middle = 0.5 * (here + shape.node_position(image));
+            for p in on_sides.iter_mut().filter(|p| p.wall.normal() == normal) {
+                if let Ok(wall) = Wall::plane(middle, normal, p.wall.boundary().friction()) {
+                    p.wall = wall;
+                }
+            }
+            active.index_of(image).map(|j| Mirror { image: j as u32, normal, fixed })
+        });
+        for p in &mut sc.node_planes[first..] {
+            p.always = hold_always(&p.wall, here);
+        }
+        for wall in walls.iter().filter(|w| w.near(here, reach)) {
+            sc.node_planes.push(NodePlane {
+                wall: *wall,
+                always: hold_always(wall, here),
+                held: false,
+            });
+        }
+        let count = sc.node_planes.len() - first;
+        if count > 0 {
+            sc.boundary.push(BoundaryNode {
+                node: i as u32,
+                first: first as u32,
+                count: count as u32,
+                mirror,
+                partner: None,
+            });
+        }
+    }
+}
+
+/// how far a material point touching a wall can be from a node of its stencil, for a stencil of
+/// `n` nodes (see [`boundary_nodes`]): over the active cells, whose nodes are all active.
+fn wall_reach<S: ShapeFunctions<N>, const N: usize>(
+    active: &mpm_grid::ActiveNodes,
+    shape: &S,
+    volume: &[f64],
+    n: usize,
+) -> f64 {
+    let mut diagonal: f64 = 0.0;
+    for &node in active.nodes() {
+        for dj in [-1, 1] {
+            let corner = NodeId::new(node.i + 1, node.j + dj);
+            if active.index_of(corner).is_some() {
+                let d = shape.node_position(corner) - shape.node_position(node);
+                diagonal = diagonal.max(d.length());
+            }
+        }
+    }
+    let half_size = volume.par_iter().map(|&v| 0.5 * v.sqrt()).reduce(|| 0.0, f64::max);
+    let side = mpm_grid::stencil_side(n) as f64;
+    (0.5 * side + 1.0) * diagonal + half_size
 }
 
 /// For the block scatter (`p2g.rs`): each active node's block rank and place in its block's patch,

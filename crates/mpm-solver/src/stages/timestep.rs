@@ -479,7 +479,8 @@ mod tests {
         }
         let c = s.checkpoint();
         assert_eq!(c.reference_density, vec![1000.0]);
-        let (shape, materials, config) = (s.shape().clone(), s.materials().to_vec(), *s.config());
+        let (shape, materials, config) =
+            (s.shape().clone(), s.materials().to_vec(), s.config().clone());
         let mut resumed = Solver::from_checkpoint(shape, materials, config, c).unwrap();
         assert_eq!(resumed.time_step(f64::INFINITY).unwrap().0, dt0);
     }
