@@ -225,8 +225,6 @@ pub struct Obstacle {
     /// particle's centre from the wall's face and r_p its half-size: −1 would be a centre on the
     /// face, below −1 a centre inside the wall.
     pub closest_edge: f64,
-    /// particles that ended inside the wall's solid.
-    pub inside: usize,
     /// steps.
     pub steps: u64,
 }
@@ -293,7 +291,6 @@ impl ShapeJob for ObstacleJob {
         r.tangential_change = change.dot(t) / p0.length();
         r.normal_change = change.dot(n) / p0.length();
         r.normal_velocity_end = r.momentum_end.dot(n) / p.total_mass();
-        r.inside = p.position.iter().filter(|&&x| wall.contains(x)).count();
         r.steps = s.step_count();
         Ok(r)
     }

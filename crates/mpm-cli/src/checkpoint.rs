@@ -32,8 +32,8 @@ use crate::output::csv::{EnergyRow, ProbeRow};
 /// carries the output time, the solver state the time step's reference densities; 3: the
 /// header with length and checksum, the history the energy check; 4: particle stresses carry
 /// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
-/// only ε̄ᵖ per particle).
-pub(crate) const FORMAT: u32 = 5;
+/// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse).
+pub(crate) const FORMAT: u32 = 6;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

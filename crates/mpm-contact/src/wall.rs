@@ -17,10 +17,12 @@
 //!
 //! # Touching (the surface-contact rule)
 //! A material point at x with half-size r and velocity v touches the wall over a step Δt when it lies
-//! over the span (s₀ − r ≤ s ≤ s₁ + r), is not beyond the solid's back (d ≥ −T − r), and its edge is
-//! on the face or reaches it within the step:
-//! d − r + Δt·min(v·n, 0) ≤ [`TOUCH_TOLERANCE`]·r. A point that has entered the solid still touches,
-//! so that the wall pushes it back out.
+//! over the span (s₀ − r ≤ s ≤ s₁ + r), its centre is not past the solid's mid-depth (d ≥ −T/2),
+//! and its edge is on the face or reaches it within the step:
+//! d − r + Δt·min(v·n, 0) ≤ [`TOUCH_TOLERANCE`]·r. A point that has entered the front half of the
+//! solid still touches, so that the wall pushes it back out; one past the mid-depth is on the back
+//! side, which a wall does not act on (a wall has one face: declare the back of a dam that can be
+//! overtopped as a second wall facing the other way).
 
 use serde::{Deserialize, Serialize};
 
@@ -116,26 +118,24 @@ impl Wall {
         (x - self.point).dot(self.normal())
     }
 
-    /// true when `x`, widened by `margin` m along the face and behind it, lies over the wall:
-    /// s₀ − margin ≤ s(x) ≤ s₁ + margin and d(x) ≥ −T − margin.
+    /// true when `x` lies over the span widened by `margin` m at both ends, at a depth behind the
+    /// face of at most `depth` m: s₀ − margin ≤ s(x) ≤ s₁ + margin and d(x) ≥ −depth.
     #[inline]
-    fn covers(&self, x: Vector, margin: f64) -> bool {
+    fn covers(&self, x: Vector, margin: f64, depth: f64) -> bool {
         let s = (x - self.point).dot(tangent_of(self.normal()));
-        s >= self.span[0] - margin
-            && s <= self.span[1] + margin
-            && self.distance(x) >= -self.thickness - margin
+        s >= self.span[0] - margin && s <= self.span[1] + margin && self.distance(x) >= -depth
     }
 
     /// true when `x` lies inside the solid: over the span, behind the face, within the thickness.
     pub fn contains(&self, x: Vector) -> bool {
-        self.distance(x) < 0.0 && self.covers(x, 0.0)
+        self.distance(x) < 0.0 && self.covers(x, 0.0, self.thickness)
     }
 
     /// true when a node at `x` lies on the face or inside the solid (the paper's rule holds such
     /// nodes whatever the material does; a node on the face is within 1e-9 of the face's scale).
     pub fn holds_node(&self, x: Vector) -> bool {
         let slack = 1e-9 * (x - self.point).length().max(1.0);
-        self.distance(x) <= slack && self.covers(x, slack)
+        self.distance(x) <= slack && self.covers(x, slack, self.thickness + slack)
     }
 
     /// the touching rule of the module documentation, for a material point at `x` of half-size
@@ -144,14 +144,14 @@ impl Wall {
     pub fn touches(&self, x: Vector, half_size: f64, velocity: Vector, dt: f64) -> bool {
         let n = self.normal();
         let gap = self.distance(x) - half_size + dt * velocity.dot(n).min(0.0);
-        gap <= TOUCH_TOLERANCE * half_size && self.covers(x, half_size)
+        gap <= TOUCH_TOLERANCE * half_size && self.covers(x, half_size, 0.5 * self.thickness)
     }
 
     /// true when some point within `reach` m of `x` lies over the wall and within `reach` of its
     /// face or inside its solid: the nodes a solver must watch, `reach` being how far a touching
     /// material point can be from the nodes of its stencil.
     pub fn near(&self, x: Vector, reach: f64) -> bool {
-        self.distance(x) <= reach && self.covers(x, reach)
+        self.distance(x) <= reach && self.covers(x, reach, self.thickness + reach)
     }
 }
 
@@ -167,15 +167,17 @@ struct WallDef {
 impl<'de> Deserialize<'de> for Wall {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         let WallDef { boundary, point, span, thickness } = WallDef::deserialize(deserializer)?;
-        let bad = !point.is_finite()
-            || span[0].is_nan()
-            || span[1].is_nan()
-            || span[0] > span[1]
+        if !point.is_finite() {
+            return Err(serde::de::Error::custom(format!("wall at {point}: point is not finite")));
+        }
+        // (a plane's span is (−∞, ∞): compared, not subtracted)
+        if span[0].partial_cmp(&span[1]) != Some(std::cmp::Ordering::Less)
             || thickness.is_nan()
-            || thickness <= 0.0;
-        if bad {
+            || thickness <= 0.0
+        {
             return Err(serde::de::Error::custom(format!(
-                "wall at {point}: span {span:?} and thickness {thickness} must be ordered and positive"
+                "wall at {point}: span {span:?} must have s0 < s1 and thickness {thickness} must be \
+                 positive"
             )));
         }
         Ok(Self { boundary, point, span, thickness })
@@ -223,8 +225,10 @@ mod tests {
         assert!(w.touches(Vector::new(2.0 - r, 0.5), r, Vector::ZERO, 1e-3));
         // passing over the top: beyond the span by more than r
         assert!(!w.touches(Vector::new(2.0 - r, 1.0 + 2.0 * r), r, Vector::ZERO, 1e-3));
-        // behind the back face
-        assert!(!w.touches(Vector::new(2.0 + 0.2 + 2.0 * r, 0.5), r, Vector::ZERO, 1e-3));
+        // past the solid's mid-depth (0.1 m): the back side, which this wall does not act on
+        assert!(w.touches(Vector::new(2.09, 0.5), r, Vector::ZERO, 1e-3));
+        assert!(!w.touches(Vector::new(2.11, 0.5), r, Vector::ZERO, 1e-3));
+        assert!(!w.touches(Vector::new(2.0 + 0.2 + r, 0.5), r, Vector::ZERO, 1e-3));
         assert!(w.near(Vector::new(1.5, 0.5), 0.6));
         assert!(!w.near(Vector::new(1.3, 0.5), 0.6));
     }
@@ -259,5 +263,7 @@ mod tests {
         let json = r#"{"boundary":{"normal":[0.0,1.0],"friction":"Rough"},"point":[0.0,0.0],
             "span":[1.0,0.0],"thickness":1.0}"#;
         assert!(serde_json::from_str::<Wall>(json).is_err());
+        let json = json.replace("[1.0,0.0]", "[1.0,1.0]");
+        assert!(serde_json::from_str::<Wall>(&json).is_err(), "a zero-length span");
     }
 }

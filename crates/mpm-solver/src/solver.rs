@@ -568,7 +568,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// the impulse the boundaries (grid sides and walls) gave the material since the start
-    /// (N·s per m of thickness): the change of its momentum is this plus gravity's impulse.
+    /// (N·s per m of thickness): the change of its momentum is this plus gravity's impulse,
+    /// except where the small-mass rule (§2(3)) dropped a light node's internal force (which
+    /// breaks Newton's third law there: set `small_mass_ratio = 0` for an exact balance).
     pub fn boundary_impulse(&self) -> Vector {
         self.dissipation.impulse
     }

@@ -247,7 +247,7 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
     let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
     assert!(matches!(err, RunError::Checkpoint { .. }), "{err}");
-    assert!(err.to_string().contains("format 1 but this mpm reads format 5"), "{err}");
+    assert!(err.to_string().contains("format 1 but this mpm reads format 6"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

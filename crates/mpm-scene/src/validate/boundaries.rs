@@ -69,7 +69,12 @@ pub(super) fn build(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Boundaries, SceneErr
 
 /// `[[boundaries.walls]]`: each wall as the solver takes it; refused beside periodic sides, and
 /// when a body's particle starts inside a wall's solid.
-pub(super) fn walls(ctx: &Ctx<'_>, f: &SceneFile, seeds: &[Seed]) -> Result<Vec<Wall>, SceneError> {
+pub(super) fn walls(
+    ctx: &Ctx<'_>,
+    f: &SceneFile,
+    grid: &GridBuilt,
+    seeds: &[Seed],
+) -> Result<Vec<Wall>, SceneError> {
     let specs = &f.boundaries.walls;
     if f.boundaries.periodic && !specs.is_empty() {
         return Err(ctx.err(
@@ -83,7 +88,7 @@ pub(super) fn walls(ctx: &Ctx<'_>, f: &SceneFile, seeds: &[Seed]) -> Result<Vec<
     let walls: Vec<Wall> = specs
         .iter()
         .enumerate()
-        .map(|(k, w)| wall(ctx, &format!("boundaries.walls[{k}]"), w))
+        .map(|(k, w)| wall(ctx, &format!("boundaries.walls[{k}]"), w, longest_cell_side(f, grid)))
         .collect::<Result<_, _>>()?;
     for (k, w) in walls.iter().enumerate() {
         if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
@@ -103,11 +108,27 @@ pub(super) fn walls(ctx: &Ctx<'_>, f: &SceneFile, seeds: &[Seed]) -> Result<Vec<
     Ok(walls)
 }
 
-fn wall(ctx: &Ctx<'_>, path: &str, w: &WallSpec) -> Result<Wall, SceneError> {
+/// A wall's solid must hold grid nodes (the paper's rule holds the nodes inside it) and be
+/// thicker than the reach of a stencil (surface contact holds every node of a touching
+/// particle's stencil, up to 1.5 cells beyond its centre): at least 2 cells, measured by the
+/// grid's longest cell side.
+const MIN_WALL_CELLS: f64 = 2.0;
+
+/// the grid's longest cell side as declared (m): the terrain grid's column width or row height.
+fn longest_cell_side(f: &SceneFile, grid: &GridBuilt) -> f64 {
+    match grid {
+        GridBuilt::Regular(g) => g.cell_size().max_element(),
+        GridBuilt::Terrain(_) => {
+            f.grid.cell_width.unwrap_or(0.0).max(f.grid.row_height.unwrap_or(0.0))
+        }
+    }
+}
+
+fn wall(ctx: &Ctx<'_>, path: &str, w: &WallSpec, cell: f64) -> Result<Wall, SceneError> {
     let law = friction(ctx, &format!("{path}.law"), w.law)?;
     let thickness = w.thickness.unwrap_or(f64::INFINITY);
     let [from, to] = [w.from, w.to].map(|p| Vector::new(p[0], p[1]));
-    Wall::segment(from, to, law, thickness).map_err(|e| match e {
+    let wall = Wall::segment(from, to, law, thickness).map_err(|e| match e {
         ContactError::InvalidThickness { thickness, .. } => ctx.range(
             &format!("{path}.thickness"),
             thickness,
@@ -121,15 +142,25 @@ fn wall(ctx: &Ctx<'_>, path: &str, w: &WallSpec) -> Result<Wall, SceneError> {
             "two distinct, finite points",
             "give the wall's other end",
         ),
+        // (`segment` checks `from` first)
         ContactError::NonFinitePoint { .. } => ctx.err(
-            &format!("{path}.from"),
+            &format!("{path}.{}", if w.from.iter().all(|v| v.is_finite()) { "to" } else { "from" }),
             None,
             "a wall end is not finite",
             "finite coordinates (m)",
             "give finite numbers",
         ),
         other => contact_error(ctx, path, other),
-    })
+    })?;
+    if thickness < MIN_WALL_CELLS * cell {
+        return Err(ctx.range(
+            &format!("{path}.thickness"),
+            thickness,
+            &format!("thickness ≥ {} m (2 cells: the reach of a stencil)", MIN_WALL_CELLS * cell),
+            "give the wall's true thickness, or refine the grid if the wall is thinner",
+        ));
+    }
+    Ok(wall)
 }
 
 /// a friction law, validated with the contact layer's own rules.

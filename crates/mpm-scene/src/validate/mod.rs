@@ -239,7 +239,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
     let boundaries = boundaries::build(ctx, f)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
-    let walls = boundaries::walls(ctx, f, &seeds)?;
+    let walls = boundaries::walls(ctx, f, &grid, &seeds)?;
     let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, kind)?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;

@@ -99,6 +99,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
                     if m.fixed {
                         // A fixed plane: the velocity field is antisymmetric across it.
+                        let trial = sc.velocity[i] + sc.acceleration[i] * dt;
+                        impulse += sc.mass[i] * (-v_image - trial);
                         sc.acceleration[i] = (-v_image - sc.velocity[i]) / dt;
                         continue;
                     }

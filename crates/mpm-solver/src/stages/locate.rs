@@ -175,7 +175,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 /// watched are those within `reach` of its face, span or solid: how far a touching point can be
 /// from a node of its stencil. That is at most (stencil side / 2) cell diagonals, plus the point's
 /// half-size (its edge touches, not its centre) and the step's travel (≤ one cell at C ≤ 1): taken
-/// as (side / 2 + 1) times the longest diagonal of an active cell plus the largest half-size.
+/// as (side / 2 + 1) times the longest diagonal of an active cell plus the largest half-size,
+/// computed when the active set is rebuilt. Between rebuilds particles may swell (a dilating
+/// flow): the spare diagonal covers a half-size growing by up to one diagonal, far more than a
+/// particle swells before its stencil changes nodes and the set is rebuilt.
 #[allow(clippy::too_many_arguments)]
 fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
     sc: &mut Scratch<F, N>,
@@ -235,6 +238,8 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
         for p in &mut sc.node_planes[first..] {
             p.always = hold_always(&p.wall, here);
         }
+        // (a ghost node meets its side's mirror plane; a declared wall acts on the grid's nodes)
+        let walls = if mirror.is_some() { &[][..] } else { walls };
         for wall in walls.iter().filter(|w| w.near(here, reach)) {
             sc.node_planes.push(NodePlane {
                 wall: *wall,
