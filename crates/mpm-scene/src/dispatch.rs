@@ -1,85 +1,17 @@
-//! The one place where a scene's run-time choices become types: constitutive model
-//! (elastic | Drucker-Prager, with particles storing the mixed-hardening variables only when some
-//! material hardens) × grid with shape functions (bilinear on the terrain grid, bilinear | uGIMP |
-//! quadratic B-spline on the regular grid). [`dispatch`] matches once per scene and calls a
-//! generic [`Job`]; everything below runs monomorphised, with no per-particle dynamic dispatch.
+//! The one place where a scene's run-time choices become types: constitutive model (any model
+//! of the registry in `materials`, as the run type that stores the least state per particle)
+//! × grid with shape functions (bilinear on the terrain grid, bilinear | uGIMP | quadratic
+//! B-spline on the regular grid). [`dispatch`] matches once per scene and calls a generic
+//! [`Job`]; everything below runs monomorphised, with no per-particle dynamic dispatch.
 
-use mpm_constitutive::{
-    ConstitutiveModel, DpPerfectState, DpState, DruckerPrager, LinearElastic, PlaneTensor,
-};
+use mpm_constitutive::PlaneTensor;
 use mpm_grid::{Bilinear, RegularShape, ShapeFunctions, ShapeJob, with_regular_shape};
-use mpm_solver::{Checkpoint, NewParticle, Particles};
-use serde::{Deserialize, Serialize};
+use mpm_solver::{NewParticle, Particles};
 
 use crate::error::SceneError;
 use crate::file::ShapeFunctionKind;
-use crate::scene::{GridBuilt, MaterialsBuilt, Scene, Seed};
-
-/// A solver state of either model, as stored in checkpoint files.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum SavedState {
-    /// elastic scenes.
-    Elastic(Checkpoint<()>),
-    /// Drucker-Prager scenes with a hardening material.
-    Plastic(Checkpoint<DpState>),
-    /// Drucker-Prager scenes whose materials do not harden (`H = 0`).
-    PerfectlyPlastic(Checkpoint<DpPerfectState>),
-}
-
-impl SavedState {
-    /// (simulated time, steps, particles) of the stored state.
-    pub fn clock(&self) -> (f64, u64, usize) {
-        match self {
-            SavedState::Elastic(c) => (c.time, c.step, c.particles.len()),
-            SavedState::Plastic(c) => (c.time, c.step, c.particles.len()),
-            SavedState::PerfectlyPlastic(c) => (c.time, c.step, c.particles.len()),
-        }
-    }
-}
-
-/// A constitutive model a scene can use.
-pub trait SceneModel: ConstitutiveModel + Clone + 'static {
-    /// wraps a solver checkpoint for storage.
-    fn wrap(c: Checkpoint<Self::State>) -> SavedState;
-    /// unwraps a stored checkpoint of this model (`None` for the other model).
-    fn unwrap(s: SavedState) -> Option<Checkpoint<Self::State>>;
-}
-
-impl SceneModel for LinearElastic {
-    fn wrap(c: Checkpoint<()>) -> SavedState {
-        SavedState::Elastic(c)
-    }
-    fn unwrap(s: SavedState) -> Option<Checkpoint<()>> {
-        match s {
-            SavedState::Elastic(c) => Some(c),
-            _ => None,
-        }
-    }
-}
-
-impl SceneModel for DruckerPrager {
-    fn wrap(c: Checkpoint<DpState>) -> SavedState {
-        SavedState::Plastic(c)
-    }
-    fn unwrap(s: SavedState) -> Option<Checkpoint<DpState>> {
-        match s {
-            SavedState::Plastic(c) => Some(c),
-            _ => None,
-        }
-    }
-}
-
-impl SceneModel for DruckerPrager<DpPerfectState> {
-    fn wrap(c: Checkpoint<DpPerfectState>) -> SavedState {
-        SavedState::PerfectlyPlastic(c)
-    }
-    fn unwrap(s: SavedState) -> Option<Checkpoint<DpPerfectState>> {
-        match s {
-            SavedState::PerfectlyPlastic(c) => Some(c),
-            _ => None,
-        }
-    }
-}
+pub use crate::materials::{ModelJob, SavedState, SceneModel};
+use crate::scene::{GridBuilt, Scene, Seed};
 
 /// Work generic over the model and the shape functions.
 pub trait Job {
@@ -137,14 +69,18 @@ pub fn dispatch<J: Job>(scene: &Scene, job: J) -> Result<J::Output, SceneError> 
             }
         }
     }
-    match &r.materials {
-        MaterialsBuilt::Elastic(m) => with_shape(scene, job, m.clone()),
-        // A scene pays for the hardening variables (64 B per particle) only if it hardens.
-        MaterialsBuilt::Plastic(m) => match r.materials.without_hardening() {
-            Some(perfect) => with_shape(scene, job, perfect),
-            None => with_shape(scene, job, m.clone()),
-        },
+    /// the scene's job as a job over the model alone.
+    struct WithScene<'a, J> {
+        job: J,
+        scene: &'a Scene,
     }
+    impl<J: Job> ModelJob for WithScene<'_, J> {
+        type Output = Result<J::Output, SceneError>;
+        fn run<M: SceneModel>(self, materials: Vec<M>) -> Self::Output {
+            with_shape(self.scene, self.job, materials)
+        }
+    }
+    r.materials.run(WithScene { job, scene })
 }
 
 /// The scene's particles with each material's initial state.
@@ -195,7 +131,7 @@ mod tests {
         let flume = load_scene_str(embedded_scene("flume").unwrap(), "flume").unwrap();
         assert_eq!(dispatch(&flume, StateBytes).unwrap(), 8);
         let hardening = flume
-            .modified(|f| f.materials.get_mut("sand").unwrap().hardening_modulus = Some(1.0e4))
+            .modified(|f| f.materials.get_mut("sand").unwrap().set("hardening_modulus", 1.0e4))
             .unwrap();
         assert_eq!(dispatch(&hardening, StateBytes).unwrap(), 64);
         let elastic = load_scene_str(embedded_scene("free_fall").unwrap(), "free_fall").unwrap();

@@ -92,68 +92,32 @@ pub struct GridSpec {
     pub cells: Option<[i64; 2]>,
 }
 
-/// Kind of material.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MaterialKind {
-    /// linear elasticity (eq 10).
-    Elastic,
-    /// Drucker-Prager with non-associated flow and mixed hardening (eqs 23–25).
-    DruckerPrager,
-}
+/// `[materials.NAME]`: `kind` (a model of the registry, [`crate::materials::KINDS`]),
+/// `density` (kg/m³) and the model's parameters, kept as written: the registry reads them
+/// as the model's own table, so a new model needs no change here.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct MaterialSpec(pub toml::Table);
 
-impl MaterialKind {
-    /// the name used in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            MaterialKind::Elastic => "elastic",
-            MaterialKind::DruckerPrager => "drucker_prager",
+impl MaterialSpec {
+    /// the `kind` as written (`None` when absent or not a string).
+    pub fn kind(&self) -> Option<&str> {
+        self.0.get("kind").and_then(toml::Value::as_str)
+    }
+
+    /// a numeric field (integer or float) as written.
+    pub fn number(&self, field: &str) -> Option<f64> {
+        match self.0.get(field)? {
+            toml::Value::Float(x) => Some(*x),
+            toml::Value::Integer(i) => Some(*i as f64),
+            _ => None,
         }
     }
-}
 
-/// How the Drucker-Prager cone is matched to Mohr-Coulomb.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ConeMatchSpec {
-    /// same plane-strain collapse load (the paper's choice).
-    PlaneStrain,
-    /// through the triaxial-extension corners.
-    Inner,
-    /// through the triaxial-compression corners.
-    Outer,
-}
-
-/// `[materials.NAME]`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialSpec {
-    /// `"elastic"` or `"drucker_prager"`.
-    pub kind: MaterialKind,
-    /// Young's modulus E (Pa).
-    pub young: f64,
-    /// Poisson's ratio ν.
-    pub poisson: f64,
-    /// initial density ρ (kg/m³).
-    pub density: f64,
-    /// Drucker-Prager: cohesion c (Pa).
-    #[serde(default)]
-    pub cohesion: Option<f64>,
-    /// Drucker-Prager: friction angle φ (degrees).
-    #[serde(default)]
-    pub friction_angle_deg: Option<f64>,
-    /// Drucker-Prager: dilatancy angle ψ (degrees), default 0.
-    #[serde(default)]
-    pub dilatancy_angle_deg: Option<f64>,
-    /// Drucker-Prager: plastic modulus H (Pa), default 0.
-    #[serde(default)]
-    pub hardening_modulus: Option<f64>,
-    /// Drucker-Prager: mixing parameter M (1 isotropic, 0 kinematic), default 1.
-    #[serde(default)]
-    pub mixing: Option<f64>,
-    /// Drucker-Prager: cone match, default `"plane_strain"`.
-    #[serde(default)]
-    pub cone_match: Option<ConeMatchSpec>,
+    /// sets `field` (for studies and tests that vary a material).
+    pub fn set(&mut self, field: &str, value: impl Into<toml::Value>) {
+        self.0.insert(field.to_string(), value.into());
+    }
 }
 
 /// Shape of a body.

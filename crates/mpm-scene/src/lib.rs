@@ -10,6 +10,8 @@
 //! - [`embedded_scene`] returns the paper's scenes compiled in (the default is the dry-sand flume
 //!   of §7); [`presets`] the measured speed/accuracy settings.
 //! - [`summary`]: what a run reports ([`RunSummary`]) and the runout measures it is built from.
+//! - [`materials`] is the registry of constitutive models a scene can name (`kind = "elastic" |
+//!   "drucker_prager" | "mu_i"`), one line per model.
 //! - [`dispatch`] is the one place where a scene's run-time choices (constitutive model, shape
 //!   functions) become types: it builds them and calls a generic [`Job`], so that nothing below
 //!   dispatches per particle.
@@ -31,6 +33,7 @@ pub mod dispatch;
 mod error;
 pub mod file;
 pub mod limits;
+pub mod materials;
 pub mod presets;
 mod scene;
 mod scenes;

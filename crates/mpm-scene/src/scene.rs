@@ -1,12 +1,12 @@
 //! A validated scene: the file as written, and everything a run needs derived from it (the
 //! grid, the materials, the particle seeds, the solver settings, the output plan).
 
-use mpm_constitutive::{DpPerfectState, DpState, DruckerPrager, LinearElastic};
 use mpm_contact::RigidSlide;
 use mpm_grid::{RegularGrid, TerrainGrid};
 use mpm_solver::{SolverConfig, Vector};
 
 use crate::file::{ReferenceCurve, SceneFile, ShapeFunctionKind, VtkField, VtkFormat};
+pub use crate::materials::MaterialsBuilt;
 
 /// A validated scene, ready to run.
 #[derive(Clone, Debug)]
@@ -24,46 +24,6 @@ pub enum GridBuilt {
     Terrain(TerrainGrid),
     /// a regular rectangular grid.
     Regular(RegularGrid),
-}
-
-/// The materials, built, all of one kind.
-#[derive(Clone, Debug)]
-pub enum MaterialsBuilt {
-    /// linear elastic materials.
-    Elastic(Vec<LinearElastic>),
-    /// Drucker-Prager materials with mixed hardening.
-    Plastic(Vec<DruckerPrager>),
-}
-
-impl MaterialsBuilt {
-    /// the Drucker-Prager materials storing only ε̄ᵖ per particle, when none of them hardens
-    /// (H = 0): a scene pays for the hardening variables only if it hardens.
-    pub fn without_hardening(&self) -> Option<Vec<DruckerPrager<DpPerfectState>>> {
-        match self {
-            MaterialsBuilt::Elastic(_) => None,
-            MaterialsBuilt::Plastic(m) => m.iter().map(DruckerPrager::without_hardening).collect(),
-        }
-    }
-
-    /// each material's P-wave modulus M = λ + 2G (Pa), in index order: c = √(M/ρ) is its wave
-    /// speed (eq 13).
-    pub fn p_wave_moduli(&self) -> Vec<f64> {
-        match self {
-            MaterialsBuilt::Elastic(v) => v.iter().map(|m| m.p_wave_modulus()).collect(),
-            MaterialsBuilt::Plastic(v) => {
-                v.iter().map(|m| m.elasticity().p_wave_modulus()).collect()
-            }
-        }
-    }
-
-    /// bytes of constitutive state per particle a run of these materials stores.
-    pub fn state_bytes(&self) -> usize {
-        match self {
-            MaterialsBuilt::Elastic(_) => 0,
-            _ if self.without_hardening().is_some() => std::mem::size_of::<DpPerfectState>(),
-            MaterialsBuilt::Plastic(_) => std::mem::size_of::<DpState>(),
-        }
-    }
 }
 
 /// One material point before the constitutive state is attached.

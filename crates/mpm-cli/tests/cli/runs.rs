@@ -118,8 +118,8 @@ fn resume_continues_bit_identically() {
     let hardening = perfect
         .modified(|f| {
             let sand = f.materials.get_mut("sand").unwrap();
-            sand.hardening_modulus = Some(2.0e4);
-            sand.mixing = Some(0.5);
+            sand.set("hardening_modulus", 2.0e4);
+            sand.set("mixing", 0.5);
         })
         .unwrap();
     for (name, scene) in [("perfect", perfect), ("hardening", hardening)] {

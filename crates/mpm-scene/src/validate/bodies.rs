@@ -120,7 +120,8 @@ pub(super) fn seeds(
             ));
         }
         let m_index = used.iter().position(|n| *n == body.material).unwrap_or(0);
-        let density = f.materials.get(&body.material).map_or(1.0, |m| m.density);
+        let density =
+            f.materials.get(&body.material).and_then(|m| m.number("density")).unwrap_or(1.0);
         for s in &fill {
             let located = match grid {
                 GridBuilt::Terrain(t) => t.locate(s.position).map(|_| ()),

@@ -1,22 +1,20 @@
-//! `[materials.NAME]`: each material built and checked, and the ones the bodies use.
+//! `[materials.NAME]`: each material built by the registry's model for its `kind`, and the
+//! ones the bodies use.
 
 use std::collections::BTreeMap;
 
-use mpm_constitutive::{
-    ConeMatch, ConstitutiveError, DruckerPrager, DruckerPragerParams, LinearElastic,
-};
+use mpm_constitutive::ConstitutiveError;
 
-use super::{Ctx, finite_pos, join, num};
+use super::{Ctx, describe, finite_pos, join, num};
 use crate::error::SceneError;
-use crate::file::{ConeMatchSpec, MaterialKind, SceneFile};
-use crate::scene::MaterialsBuilt;
+use crate::file::SceneFile;
+use crate::materials::{BuildError, Built, KINDS, MaterialsBuilt};
 
-/// Every declared material by name, built: (kind, elastic, Drucker-Prager).
-pub(super) type Built<'a> =
-    BTreeMap<&'a str, (MaterialKind, Option<LinearElastic>, Option<DruckerPrager>)>;
-
-/// Builds every declared material.
-pub(super) fn build<'a>(ctx: &Ctx<'_>, f: &'a SceneFile) -> Result<Built<'a>, SceneError> {
+/// Builds every declared material, by name.
+pub(super) fn build<'a>(
+    ctx: &Ctx<'_>,
+    f: &'a SceneFile,
+) -> Result<BTreeMap<&'a str, Built>, SceneError> {
     if f.materials.is_empty() {
         return Err(ctx.err(
             "materials",
@@ -26,82 +24,93 @@ pub(super) fn build<'a>(ctx: &Ctx<'_>, f: &'a SceneFile) -> Result<Built<'a>, Sc
             "add e.g. [materials.sand] with kind, young, poisson and density",
         ));
     }
-    let mut built = Built::new();
+    let kinds = || KINDS.iter().map(|k| format!("\"{k}\"")).collect::<Vec<_>>().join(", ");
+    let mut built = BTreeMap::new();
     for (name, m) in &f.materials {
         let base = format!("materials.{name}");
         let p = |field: &str| format!("{base}.{field}");
-        if !(finite_pos(m.density) && m.density < 1e6) {
+        let kind = match m.0.get("kind") {
+            None => {
+                return Err(ctx.missing(
+                    &p("kind"),
+                    "every material names its model",
+                    "\"elastic\"",
+                ));
+            }
+            Some(toml::Value::String(k)) => k.as_str(),
+            Some(v) => {
+                return Err(ctx.err(
+                    &p("kind"),
+                    Some(v.to_string()),
+                    "the kind is a model's name",
+                    format!("one of {}", kinds()),
+                    "write the kind as a quoted name, e.g. kind = \"drucker_prager\"",
+                ));
+            }
+        };
+        let density = match m.0.get("density") {
+            None => {
+                return Err(ctx.missing(&p("density"), "every material has a density", "1600.0"));
+            }
+            Some(_) => m.number("density").ok_or_else(|| {
+                ctx.err(
+                    &p("density"),
+                    m.0.get("density").map(ToString::to_string),
+                    "the density is a number",
+                    "0 < density < 1e6 (kg/m³)",
+                    "write the density in kg/m³, e.g. density = 1600.0",
+                )
+            })?,
+        };
+        if !(finite_pos(density) && density < 1e6) {
             return Err(ctx.range(
                 &p("density"),
-                m.density,
+                density,
                 "0 < density < 1e6 (kg/m³)",
                 "give the material's density, e.g. 1600 for dry sand",
             ));
         }
-        let elastic = LinearElastic::from_young_poisson(m.young, m.poisson)
-            .map_err(|e| material_error(ctx, &base, e))?;
-        match m.kind {
-            MaterialKind::Elastic => {
-                for (field, present) in [
-                    ("cohesion", m.cohesion.is_some()),
-                    ("friction_angle_deg", m.friction_angle_deg.is_some()),
-                    ("dilatancy_angle_deg", m.dilatancy_angle_deg.is_some()),
-                    ("hardening_modulus", m.hardening_modulus.is_some()),
-                    ("mixing", m.mixing.is_some()),
-                    ("cone_match", m.cone_match.is_some()),
-                ] {
-                    if present {
-                        return Err(ctx.foreign(
-                            &p(field),
-                            "an elastic material has only young, poisson and density; \
-                             use kind = \"drucker_prager\" for plasticity",
-                        ));
-                    }
+        let mut params = m.0.clone();
+        params.remove("kind");
+        params.remove("density");
+        let material = Built::new(kind, params, density).map_err(|e| match e {
+            BuildError::UnknownKind => ctx.err(
+                &p("kind"),
+                Some(format!("\"{kind}\"")),
+                format!("no material model is registered as `{kind}`"),
+                format!("one of {}", kinds()),
+                "use one of the admissible names (docs/scene-format.md describes each model)",
+            ),
+            BuildError::Table(inner, message) => {
+                let path = if inner == "." { base.clone() } else { join(&base, &inner) };
+                let mut e = describe(ctx, &message, path, None);
+                if e.problem.starts_with("unknown field") {
+                    e.fix = format!(
+                        "remove it or correct its spelling, or change `kind` (\"{kind}\") to \
+                         the model it belongs to (docs/scene-format.md lists each model's fields)"
+                    );
                 }
-                built.insert(name, (m.kind, Some(elastic), None));
+                e
             }
-            MaterialKind::DruckerPrager => {
-                let cohesion = m.cohesion.ok_or_else(|| {
-                    ctx.missing(&p("cohesion"), "Drucker-Prager material", "10.0")
-                })?;
-                let friction_angle_deg = m.friction_angle_deg.ok_or_else(|| {
-                    ctx.missing(&p("friction_angle_deg"), "Drucker-Prager material", "40.0")
-                })?;
-                let params = DruckerPragerParams {
-                    young: m.young,
-                    poisson: m.poisson,
-                    cohesion,
-                    friction_angle_deg,
-                    dilatancy_angle_deg: m.dilatancy_angle_deg.unwrap_or(0.0),
-                    hardening_modulus: m.hardening_modulus.unwrap_or(0.0),
-                    mixing: m.mixing.unwrap_or(1.0),
-                    cone_match: match m.cone_match.unwrap_or(ConeMatchSpec::PlaneStrain) {
-                        ConeMatchSpec::PlaneStrain => ConeMatch::PlaneStrain,
-                        ConeMatchSpec::Inner => ConeMatch::Inner,
-                        ConeMatchSpec::Outer => ConeMatch::Outer,
-                    },
-                };
-                let dp = DruckerPrager::new(params).map_err(|e| material_error(ctx, &base, e))?;
-                built.insert(name, (m.kind, None, Some(dp)));
-            }
-        }
+            BuildError::Model(e, fix) => material_error(ctx, &base, e, fix),
+        })?;
+        built.insert(name.as_str(), material);
     }
     Ok(built)
 }
 
 /// The materials the bodies use, in name order (a body's material index is its position here),
-/// all of one kind: (materials, their names, their kind).
+/// all of one model: (materials, their names).
 pub(super) fn select<'a>(
     ctx: &Ctx<'_>,
     f: &'a SceneFile,
-    built: &Built<'a>,
-) -> Result<(MaterialsBuilt, Vec<&'a str>, MaterialKind), SceneError> {
-    // Material indices: the used materials, in name order.
+    built: &BTreeMap<&'a str, Built>,
+) -> Result<(MaterialsBuilt, Vec<&'a str>), SceneError> {
     let mut used: Vec<&str> = Vec::new();
-    let mut kind: Option<(MaterialKind, usize)> = None;
+    let mut first: Option<(&Built, usize)> = None;
     for (b, body) in f.bodies.iter().enumerate() {
         let path = format!("bodies[{b}].material");
-        let Some((k, _, _)) = built.get(body.material.as_str()) else {
+        let Some(m) = built.get(body.material.as_str()) else {
             let names: Vec<String> = f.materials.keys().map(|n| format!("\"{n}\"")).collect();
             return Err(ctx.err(
                 &path,
@@ -111,24 +120,24 @@ pub(super) fn select<'a>(
                 format!("define [materials.{}] or use a defined name", body.material),
             ));
         };
-        match kind {
-            Some((k0, b0)) if k0 != *k => {
+        match first {
+            Some((m0, b0)) if m0.kind() != m.kind() => {
                 return Err(ctx.err(
                     &path,
                     Some(format!("\"{}\"", body.material)),
                     format!(
                         "this body is {} but bodies[{b0}] is {}: a run uses one constitutive \
-                         model for all bodies, so elastic and Drucker-Prager bodies cannot be \
-                         mixed in one scene",
-                        k.name(),
-                        k0.name()
+                         model for all bodies, so bodies of different models cannot be mixed \
+                         in one scene",
+                        m.title(),
+                        m0.title()
                     ),
                     "all bodies of a scene with materials of one kind",
                     "give every body a material of the same kind (or run the bodies in \
                      separate scenes)",
                 ));
             }
-            None => kind = Some((*k, b)),
+            None => first = Some((m, b)),
             _ => {}
         }
         if !used.contains(&body.material.as_str()) {
@@ -136,19 +145,29 @@ pub(super) fn select<'a>(
         }
     }
     used.sort_unstable();
-    let (material_kind, _) = kind.unwrap_or((MaterialKind::Elastic, 0));
-    let materials = match material_kind {
-        MaterialKind::Elastic => MaterialsBuilt::Elastic(
-            used.iter().filter_map(|n| built.get(n).and_then(|b| b.1)).collect(),
-        ),
-        MaterialKind::DruckerPrager => MaterialsBuilt::Plastic(
-            used.iter().filter_map(|n| built.get(n).and_then(|b| b.2.clone())).collect(),
-        ),
+    let mut chosen = used.iter().filter_map(|n| built.get(n).cloned());
+    let materials = chosen.next().and_then(|m| MaterialsBuilt::collect(m, chosen.collect()).ok());
+    let Some(materials) = materials else {
+        // `bodies::count` refuses a scene without bodies, and bodies of two models are refused
+        // above: this is a guard, not a path a scene can take.
+        return Err(ctx.err(
+            "bodies",
+            None,
+            "the bodies use no material of one model",
+            "at least one [[bodies]] table, all with materials of one kind",
+            "add a [[bodies]] table with a defined material",
+        ));
     };
-    Ok((materials, used, material_kind))
+    Ok((materials, used))
 }
 
-pub(super) fn material_error(ctx: &Ctx<'_>, base: &str, e: ConstitutiveError) -> SceneError {
+/// A value the model refused, located at its field.
+fn material_error(
+    ctx: &Ctx<'_>,
+    base: &str,
+    e: ConstitutiveError,
+    fix: fn(&str) -> &'static str,
+) -> SceneError {
     let (field, value, admissible) = match &e {
         ConstitutiveError::InvalidParameter { name, value, range } => {
             let field = match *name {
@@ -164,15 +183,5 @@ pub(super) fn material_error(ctx: &Ctx<'_>, base: &str, e: ConstitutiveError) ->
         ),
         _ => (String::new(), None, String::new()),
     };
-    let fix = match field.as_str() {
-        "young" => "give Young's modulus in Pa, e.g. 2e6 for loose sand",
-        "poisson" => "use a Poisson's ratio below 0.5, e.g. 0.3",
-        "cohesion" => "use a cohesion ≥ 0 in Pa (10 Pa in the paper's sand)",
-        "friction_angle_deg" => "use a friction angle below 90°, e.g. 40 for dry sand",
-        "dilatancy_angle_deg" => "use 0 ≤ ψ ≤ φ (0 in the paper)",
-        "mixing" => "use M between 0 (kinematic) and 1 (isotropic); 0.8 in the paper",
-        "hardening_modulus" => "use H ≥ 0 (0 in the paper) or a milder softening",
-        _ => "see docs/scene-format.md",
-    };
-    ctx.err(&join(base, &field), value, e.to_string(), admissible, fix)
+    ctx.err(&join(base, &field), value, e.to_string(), admissible, fix(&field))
 }

@@ -7,8 +7,8 @@
 //! runs until the whole scene is consistent.
 //!
 //! A scene uses one constitutive model for all bodies (the solver is generic over it, with no
-//! per-particle dispatch): a scene whose bodies use both elastic and Drucker-Prager materials is
-//! refused with an error that says so.
+//! per-particle dispatch): a scene whose bodies use materials of two models (e.g. elastic and
+//! Drucker-Prager) is refused with an error that says so.
 
 mod bodies;
 mod boundaries;
@@ -50,7 +50,7 @@ impl Ctx<'_> {
         admissible: impl Into<String>,
         fix: impl Into<String>,
     ) -> SceneError {
-        let (line, column) = match self.map.locate(path) {
+        let (line, column) = match self.locate(path) {
             Some((l, c)) => (Some(l), Some(c)),
             None => (None, None),
         };
@@ -63,6 +63,18 @@ impl Ctx<'_> {
             problem: problem.into(),
             admissible: admissible.into(),
             fix: fix.into(),
+        }
+    }
+
+    /// (line, column) of `path`, or of the nearest enclosing table or array element that the
+    /// text has (a missing field is reported at its table).
+    fn locate(&self, path: &str) -> Option<(usize, usize)> {
+        let mut p = path;
+        loop {
+            if let Some(at) = self.map.locate(p) {
+                return Some(at);
+            }
+            p = &p[..p.rfind(['.', '['])?];
         }
     }
 
@@ -126,9 +138,20 @@ impl Scene {
 
 /// Maps a TOML syntax or serde error to a located [`SceneError`].
 fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
-    let message = e.message().trim().to_string();
     let span = e.span();
-    let mut path = span.as_ref().map(|s| ctx.map.path_at(s.start)).unwrap_or_default();
+    let path = span.as_ref().map(|s| ctx.map.path_at(s.start)).unwrap_or_default();
+    describe(ctx, e.message(), path, span)
+}
+
+/// A serde `message` about the field at `path` (the span of the text it came from, when
+/// known) as a located [`SceneError`] with the admissible values and a fix.
+fn describe(
+    ctx: &Ctx<'_>,
+    message: &str,
+    mut path: String,
+    span: Option<std::ops::Range<usize>>,
+) -> SceneError {
+    let message = message.trim().to_string();
     let quoted = |prefix: &str| -> Option<String> {
         let rest = message.strip_prefix(prefix)?;
         let rest = rest.strip_prefix('`')?;
@@ -202,7 +225,7 @@ fn serde_error(ctx: &Ctx<'_>, e: &toml::de::Error) -> SceneError {
             let (l, c) = ctx.map.line_col(s.start);
             (Some(l), Some(c))
         }
-        None => match ctx.map.locate(&path) {
+        None => match ctx.locate(&path) {
             Some((l, c)) => (Some(l), Some(c)),
             None => (None, None),
         },
@@ -234,13 +257,14 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let shape_function = grid::shape_function(ctx, &f.solver, settings.preset, &grid)?;
     let built = materials::build(ctx, f)?;
     bodies::count(ctx, f)?;
-    let (materials, used, kind) = materials::select(ctx, f, &built)?;
+    let (materials, used) = materials::select(ctx, f, &built)?;
     let (seeds, spacing, gimp_ppc) =
         bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
     let boundaries = boundaries::build(ctx, f)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
     let walls = boundaries::walls(ctx, f, &grid, &seeds)?;
-    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, kind)?;
+    let objective = materials.objective_stress();
+    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, objective)?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;

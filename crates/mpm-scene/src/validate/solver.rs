@@ -7,7 +7,7 @@ use mpm_solver::{
 
 use super::{Ctx, finite_pos, num, pair};
 use crate::error::SceneError;
-use crate::file::{MaterialKind, SolverSpec};
+use crate::file::SolverSpec;
 use crate::presets::{self, PresetSettings};
 use crate::scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, MaterialsBuilt, Seed,
@@ -135,7 +135,8 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
     })
 }
 
-/// The solver configuration of a scene whose materials are of `kind`.
+/// The solver configuration of a scene (`objective_default`: whether its model wants the
+/// objective stress rate unless the scene says otherwise).
 pub(super) fn config(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
@@ -143,7 +144,7 @@ pub(super) fn config(
     boundaries: Boundaries,
     periodic: Option<Periodic>,
     walls: Vec<Wall>,
-    kind: MaterialKind,
+    objective_default: bool,
 ) -> Result<SolverConfig, SceneError> {
     let config = SolverConfig {
         scheme: settings.scheme,
@@ -153,7 +154,7 @@ pub(super) fn config(
         periodic,
         walls,
         small_mass_ratio: settings.small_mass_ratio,
-        objective_stress: s.objective_stress.unwrap_or(kind == MaterialKind::DruckerPrager),
+        objective_stress: s.objective_stress.unwrap_or(objective_default),
         gravity_ramp: settings.gravity_ramp,
         transfer: s.transfer.unwrap_or_default(),
         contact: s.contact.unwrap_or_default(),
