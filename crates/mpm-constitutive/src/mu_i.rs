@@ -18,7 +18,13 @@
 //! Elastic trial `σᵗʳ = σ + C : Δε` (eq 10 of Abe et al. 2005). Then, with `pᵗʳ`, `τ̄ᵗʳ` its
 //! pressure and equivalent shear stress:
 //! - `pᵗʳ ≤ 0` (**separated**): the grains lose contact, `σ = 0`. A cohesionless granular
-//!   material carries no tension; the material re-forms as soon as it is compressed again.
+//!   material carries no tension. The volumetric strain past the point of zero pressure,
+//!   `e_o = −pᵗʳ/K`, is kept as the *opening* (the loose material's volume in excess of the
+//!   volume at which it lost contact, the role of Dunatunga & Kamrin's critical density): while
+//!   `e_o > 0` the material is a stress-free granular gas that stretches and compacts freely,
+//!   and it carries stress again only once compaction has closed the opening (the part of the
+//!   increment after closure loads the skeleton). Without it, a cloud of separated grains at a
+//!   tenth of its density would stiffen at the first compression as if it were dense.
 //! - `τ̄ᵗʳ ≤ μ_s pᵗʳ` (**elastic**): `σ = σᵗʳ`.
 //! - otherwise (**flowing**): the deviator shrinks radially at constant pressure (no dilatancy,
 //!   as in Jop et al.), `Dᵖ = γ̇ᵖ s/(2τ̄)`, so `τ̄ = τ̄ᵗʳ − G Δt γ̇ᵖ`, and the shear stress is the
@@ -96,11 +102,14 @@ impl MuIBranch {
     pub const SEPARATED: Branch = Branch::new(2);
 }
 
-/// Internal variable of [`MuI`]: the accumulated equivalent plastic shear strain `Σ γ̇ᵖ Δt`.
+/// Internal variables of [`MuI`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MuIState {
-    /// `Σ γ̇ᵖ Δt` (dimensionless).
+    /// the accumulated equivalent plastic shear strain `Σ γ̇ᵖ Δt` (dimensionless).
     pub gamma_p: f64,
+    /// the opening `e_o ≥ 0`: volumetric strain of separated material in excess of the volume
+    /// at which it lost contact (module docs); 0 while the grains touch.
+    pub opening: f64,
 }
 
 /// The elasto-viscoplastic μ(I) rheology (module docs).
@@ -226,14 +235,42 @@ impl ConstitutiveModel for MuI {
                 range: "finite and > 0 (a rate-dependent model needs the step's duration)",
             });
         }
-        let trial = *sigma + self.elastic.stress_increment(d_eps);
+        if !state.opening.is_finite() {
+            return Err(ConstitutiveError::NonFiniteState {
+                name: "opening",
+                value: state.opening,
+            });
+        }
+        // Separated material is stress-free until compaction closes the opening; only the part
+        // of the increment after closure (fraction f, over f Δt) loads the skeleton.
+        let (mut start, mut d_eps, mut dt) = (*sigma, *d_eps, dt);
+        if state.opening > 0.0 {
+            let dv = d_eps.trace();
+            let open = state.opening + dv;
+            if open >= 0.0 {
+                *sigma = SymTensor::ZERO;
+                state.opening = open;
+                return Ok(UpdateReport {
+                    branch: MuIBranch::SEPARATED,
+                    delta_lambda: 0.0,
+                    dissipation: 0.0,
+                });
+            }
+            let f = open / dv; // both negative: f ∈ (0, 1]
+            d_eps = d_eps * f;
+            dt *= f;
+            start = SymTensor::ZERO;
+        }
+        let trial = start + self.elastic.stress_increment(&d_eps);
         if !trial.is_finite() {
             let (component, value) = trial.first_non_finite().unwrap_or(("xx", f64::NAN));
             return Err(ConstitutiveError::NonFiniteStress { component, value });
         }
+        state.opening = 0.0;
         let p = -trial.mean();
         if p <= 0.0 {
             *sigma = SymTensor::ZERO;
+            state.opening = -p / self.elastic.bulk_modulus();
             return Ok(UpdateReport {
                 branch: MuIBranch::SEPARATED,
                 delta_lambda: 0.0,
@@ -359,6 +396,44 @@ mod tests {
         let rep = m.update(&mut s, &mut st, &pull, 1e-4).unwrap();
         assert_eq!(rep.branch, MuIBranch::SEPARATED);
         assert_eq!(s, SymTensor::ZERO);
+        // the opening is the volumetric strain past zero pressure: tr(pull) − p/K.
+        let past = 3.0 * pull.xx - 500.0 / k;
+        assert!((st.opening - past).abs() <= 1e-12 * past, "{} vs {past}", st.opening);
+    }
+
+    /// Separated grains carry no stress until compaction has closed the opening; then only the
+    /// compaction after closure loads the skeleton, so a loose cloud does not stiffen at once.
+    #[test]
+    fn separated_material_carries_stress_only_after_the_opening_closes() {
+        let m = beads();
+        let k = m.elasticity().bulk_modulus();
+        let (mut s, mut st) = (SymTensor::ZERO, m.initial_state());
+        // open by a volumetric strain of 3e-3 in three steps (stress-free all along).
+        let pull = SymTensor::IDENTITY * (1e-3 / 3.0);
+        for _ in 0..3 {
+            assert_eq!(
+                m.update(&mut s, &mut st, &pull, 1e-4).unwrap().branch,
+                MuIBranch::SEPARATED
+            );
+        }
+        assert!((st.opening - 3e-3).abs() <= 1e-15);
+        // compact by 2e-3: still loose, no stress.
+        let push = SymTensor::IDENTITY * (-1e-3 / 3.0);
+        for _ in 0..2 {
+            assert_eq!(
+                m.update(&mut s, &mut st, &push, 1e-4).unwrap().branch,
+                MuIBranch::SEPARATED
+            );
+            assert_eq!(s, SymTensor::ZERO);
+        }
+        // compact by 1.5e-3: the opening (1e-3) closes, and the last 0.5e-3 loads the skeleton
+        // isotropically: p = K · 0.5e-3.
+        let last = SymTensor::IDENTITY * (-1.5e-3 / 3.0);
+        assert_eq!(m.update(&mut s, &mut st, &last, 1e-4).unwrap(), UpdateReport::ELASTIC);
+        assert_eq!(st.opening, 0.0);
+        let p = -s.mean();
+        assert!((p - k * 0.5e-3).abs() <= 1e-9 * p, "p = {p}, K e = {}", k * 0.5e-3);
+        assert!(s.deviator().j2() <= 1e-20 * p * p);
     }
 
     #[test]
