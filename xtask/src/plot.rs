@@ -1,10 +1,10 @@
 //! The figures of `cargo xtask`'s reports: panels of line and scatter charts, drawn by the
-//! CLI's chart module (`mpm_cli::output::plots`, plotters with an embedded font).
+//! project's one chart module (`mpm_output::plots`, plotters with an embedded font).
 
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
-use mpm_cli::output::plots::{self, Chart, Style};
+use mpm_output::plots::{self, Chart, Style};
 
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

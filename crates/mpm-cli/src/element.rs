@@ -14,8 +14,8 @@ use crate::error::RunError;
 
 /// (label, first plot's points, second plot's points) of one case.
 type Curve = (String, Vec<(f64, f64)>, Vec<(f64, f64)>);
-use crate::output::atomic;
-use crate::output::plots::{self, Chart, Series, Style};
+use mpm_output::atomic;
+use mpm_output::plots::{self, Chart, Series, Style};
 
 /// Which element test.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -71,3 +71,15 @@ impl From<SceneError> for RunError {
         RunError::Scene(Box::new(e))
     }
 }
+
+impl From<mpm_output::OutputError> for RunError {
+    fn from(e: mpm_output::OutputError) -> Self {
+        use mpm_output::OutputError as O;
+        match e {
+            O::Io { path, source } => RunError::Io { path, source },
+            O::OutputExists(dir) => RunError::OutputExists(dir),
+            O::Locked { dir, lock, pid } => RunError::Locked { dir, lock, pid },
+            O::Checkpoint { path, reason } => RunError::Checkpoint { path, reason },
+        }
+    }
+}

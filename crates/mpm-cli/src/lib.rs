@@ -39,16 +39,14 @@
 // range, fix); it is returned once, before any step, so its size costs nothing.
 #![allow(clippy::result_large_err)]
 
-mod checkpoint;
 mod element;
 mod error;
-pub mod output;
 mod progress;
 mod run;
 
-pub use checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
+pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
 // The scene library, re-exported so that `mpm_cli::` users keep one import path.

@@ -20,11 +20,13 @@ use mpm_scene::{GridBuilt, Scene, SceneError, ground_height, load_scene_str};
 use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, CheckpointFile, History};
+use mpm_output::checkpoint::{self, CheckpointFile, History};
+use mpm_output::csv::{self, EnergyRow, ProbeRow};
+use mpm_output::dir::{DirLock, prepare_dir};
+use mpm_output::report::{self, Deposit};
+use mpm_output::{atomic, vtk};
+
 use crate::error::RunError;
-use crate::output::csv::{self, EnergyRow, ProbeRow};
-use crate::output::plots::{self, Chart, Series, Style};
-use crate::output::{atomic, vtk};
 use crate::progress::Progress;
 
 /// How to run a scene.
@@ -231,178 +233,6 @@ where
         .num_threads(mpm_solver::useful_threads(particles, available.max(1)));
     let pool = b.build().map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
     pool.install(|| f(rayon::current_num_threads()))
-}
-
-/// The lock file of a running output directory (it holds the process id).
-pub(crate) const LOCK_FILE: &str = ".mpm.lock";
-
-/// The files a run writes into its output directory (besides `frames/particles_*.vtp` and
-/// temporary `.NAME.tmp-PID.EXT` files): what `--force` removes.
-const RUN_FILES: [&str; 11] = [
-    "scene.toml",
-    "summary.json",
-    "particles.pvd",
-    "energy.csv",
-    "probes.csv",
-    "runout.csv",
-    checkpoint::FILE_NAME,
-    "plots/energy.png",
-    "plots/probes.png",
-    "plots/runout.png",
-    "plots/deposit.png",
-];
-
-/// One run per output directory: a lock file created atomically (a hard link of a file that
-/// already holds the process id, which fails if the lock exists; where the file system has no
-/// hard links, an exclusive create) and removed when the run ends. A lock whose process no
-/// longer exists (a run killed with SIGKILL) is taken over: renamed aside, which only one process
-/// can do, and checked to be the stale one before it is deleted. A lock holding this process's
-/// own id is stale unless this process holds it now (a restarted container often gets the same
-/// pid as the run it replaces).
-pub(crate) struct DirLock {
-    path: PathBuf,
-}
-
-/// The locks this process holds (a library user may start runs from several threads).
-static HELD: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
-
-impl DirLock {
-    /// takes the lock of `dir` (which must exist), or names the process holding it.
-    pub(crate) fn acquire(dir: &Path) -> Result<Self, RunError> {
-        let path = dir.join(LOCK_FILE);
-        let pid = std::process::id();
-        let mine = dir.join(format!("{LOCK_FILE}.{pid}"));
-        std::fs::write(&mine, format!("{pid}\n"))
-            .map_err(|source| RunError::Io { path: mine.clone(), source })?;
-        let locked = |holder: Option<u32>| {
-            Err(RunError::Locked {
-                dir: dir.to_path_buf(),
-                lock: path.clone(),
-                pid: holder.unwrap_or(0),
-            })
-        };
-        let mut result = locked(None);
-        // A few attempts: after taking over a stale lock, or when the holder ended meanwhile.
-        for _ in 0..4 {
-            let linked = match std::fs::hard_link(&mine, &path) {
-                Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
-                    // no hard links here: an exclusive create, then the pid
-                    std::fs::OpenOptions::new().write(true).create_new(true).open(&path).and_then(
-                        |mut f| std::io::Write::write_all(&mut f, format!("{pid}\n").as_bytes()),
-                    )
-                }
-                other => other,
-            };
-            match linked {
-                Ok(()) => {
-                    if let Ok(mut held) = HELD.lock() {
-                        held.push(path.clone());
-                    }
-                    result = Ok(DirLock { path: path.clone() });
-                    break;
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = match std::fs::read_to_string(&path) {
-                        Ok(text) => text.trim().parse::<u32>().ok(),
-                        // the holder ended between our attempt and the read: try again
-                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
-                        Err(_) => None,
-                    };
-                    match holder {
-                        Some(other) if stale(other, &path) => {
-                            let aside = dir.join(format!("{LOCK_FILE}.stale-{pid}"));
-                            if std::fs::rename(&path, &aside).is_ok() {
-                                let moved = std::fs::read_to_string(&aside)
-                                    .ok()
-                                    .and_then(|t| t.trim().parse::<u32>().ok());
-                                if moved != Some(other) {
-                                    // another process took the stale lock over first and this
-                                    // moved its live one: put it back
-                                    let _ = std::fs::rename(&aside, &path);
-                                    result = locked(moved);
-                                    break;
-                                }
-                                let _ = std::fs::remove_file(&aside);
-                            }
-                        }
-                        other => {
-                            result = locked(other);
-                            break;
-                        }
-                    }
-                }
-                Err(source) => {
-                    result = Err(RunError::Io { path: path.clone(), source });
-                    break;
-                }
-            }
-        }
-        let _ = std::fs::remove_file(&mine);
-        result
-    }
-}
-
-impl Drop for DirLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-        if let Ok(mut held) = HELD.lock() {
-            held.retain(|p| p != &self.path);
-        }
-    }
-}
-
-/// whether a lock at `path` naming process `pid` is stale: that process does not exist, or it
-/// is this process and this process does not hold the lock. Where `/proc` does not exist, every
-/// other process counts as alive (the message then tells the user how to remove a stale lock).
-fn stale(pid: u32, path: &Path) -> bool {
-    if pid == std::process::id() {
-        return HELD.lock().is_ok_and(|held| !held.iter().any(|p| p == path));
-    }
-    let proc = Path::new("/proc");
-    proc.is_dir() && !proc.join(pid.to_string()).exists()
-}
-
-/// locks `dir` (creating it) and refuses it if it holds anything unless `force`, in which case
-/// the files an earlier run wrote are removed (and only those); creates the layout.
-fn prepare_dir(dir: &Path, force: bool) -> Result<DirLock, RunError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| RunError::Io { path, source }
-    };
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let lock = DirLock::acquire(dir)?;
-    let non_empty = std::fs::read_dir(dir)
-        .map_err(io(dir))?
-        .flatten()
-        .any(|e| !e.file_name().to_string_lossy().starts_with(LOCK_FILE));
-    if non_empty && !force {
-        return Err(RunError::OutputExists(dir.to_path_buf()));
-    }
-    if force {
-        remove_run_files(dir);
-    }
-    for d in [dir.join("frames"), dir.join("plots")] {
-        std::fs::create_dir_all(&d).map_err(io(&d))?;
-    }
-    Ok(lock)
-}
-
-/// removes what a run writes into `dir` (see [`RUN_FILES`]), leaving anything else.
-fn remove_run_files(dir: &Path) {
-    for name in RUN_FILES {
-        let _ = std::fs::remove_file(dir.join(name));
-    }
-    for sub in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
-        let Ok(entries) = std::fs::read_dir(&sub) else { continue };
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            let frame =
-                sub.ends_with("frames") && name.starts_with("particles_") && name.ends_with(".vtp");
-            if frame || (name.starts_with('.') && name.contains(".tmp-")) {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
-    }
 }
 
 struct RunJob<'a> {
@@ -743,17 +573,15 @@ impl Driver<'_> {
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        checkpoint::write(
-            &dir.join(checkpoint::FILE_NAME),
-            &CheckpointFile {
-                format: checkpoint::FORMAT,
-                code_version: env!("CARGO_PKG_VERSION").to_string(),
-                origin: self.scene.origin().to_string(),
-                scene_text: self.scene.text().to_string(),
-                state: M::wrap(solver.checkpoint()),
-                history: self.history.clone(),
-            },
-        )
+        let file = CheckpointFile {
+            format: checkpoint::FORMAT,
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            origin: self.scene.origin().to_string(),
+            scene_text: self.scene.text().to_string(),
+            state: M::wrap(solver.checkpoint()),
+            history: self.history.clone(),
+        };
+        Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
     }
 
     fn summary<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
@@ -812,166 +640,14 @@ impl Driver<'_> {
         &self,
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
-        let r = self.scene.resolved();
         let Some(dir) = self.dir else { return Ok(()) };
-        if !r.output.plots {
+        if !self.scene.resolved().output.plots {
             return Ok(());
         }
-        let plot_dir = dir.join("plots");
-        let h = &self.history;
-        let e0 = h.energy.first().map_or(0.0, |r| r.ledger.potential);
-        let line = |name: &str, color, f: &dyn Fn(&EnergyRow) -> f64| Series {
-            name: name.into(),
-            points: h.energy.iter().map(|row| (row.time, f(row))).collect(),
-            style: Style::Line,
-            color,
-        };
-        plots::chart(
-            &plot_dir.join("energy.png"),
-            &Chart {
-                title: "Energy history",
-                x_label: "time (s)",
-                y_label: "energy (J/m)",
-                size: (900, 560),
-                equal_aspect: false,
-            },
-            &[
-                line("kinetic", 0, &|r| r.ledger.kinetic),
-                line("strain", 2, &|r| r.ledger.strain),
-                line("potential − initial", 4, &|r| r.ledger.potential - e0),
-                line("dissipated", 1, &|r| r.ledger.dissipated()),
-                line("external work", 5, &|r| r.ledger.external_work),
-                line("residual (error)", 6, &|r| r.ledger.residual),
-            ],
-        )?;
-        if !r.output.probes.is_empty() {
-            let mut series = Vec::new();
-            for (k, &i) in r.output.probes.iter().enumerate() {
-                series.push(Series {
-                    name: format!("particle {i}"),
-                    points: h
-                        .probes
-                        .iter()
-                        .filter(|p| p.probe == k)
-                        .map(|p| (p.time, p.along))
-                        .collect(),
-                    style: Style::Line,
-                    color: k,
-                });
-            }
-            let label = match r.output.reference {
-                Some(rf) => {
-                    let t_end = solver.time();
-                    let n = 200;
-                    series.push(Series {
-                        name: format!("{} (rigid block)", rf.curve.name()),
-                        points: (0..=n)
-                            .map(|j| {
-                                let t = t_end * j as f64 / n as f64;
-                                (t, rf.displacement(t))
-                            })
-                            .collect(),
-                        style: Style::Dashed,
-                        color: 1,
-                    });
-                    if rf.direction == Vector::X {
-                        "displacement along x (m)"
-                    } else if rf.direction == -Vector::X {
-                        "displacement along −x (m)"
-                    } else {
-                        "displacement down the slope (m)"
-                    }
-                }
-                None => "displacement along x (m)",
-            };
-            plots::chart(
-                &plot_dir.join("probes.png"),
-                &Chart {
-                    title: "Probe displacement",
-                    x_label: "time (s)",
-                    y_label: label,
-                    size: (900, 560),
-                    equal_aspect: false,
-                },
-                &series,
-            )?;
-        }
-        let runout_line = |name: &str, color, f: &dyn Fn(&RunoutMetrics) -> f64| Series {
-            name: name.into(),
-            points: h.runout.iter().map(|m| (m.time, f(m))).collect(),
-            style: Style::Line,
-            color,
-        };
-        plots::chart(
-            &plot_dir.join("runout.png"),
-            &Chart {
-                title: "Runout",
-                x_label: "time (s)",
-                y_label: "position / thickness (m)",
-                size: (900, 560),
-                equal_aspect: false,
-            },
-            &[
-                runout_line("front x", 0, &|m| m.front_x),
-                runout_line("tail x", 2, &|m| m.tail_x),
-                runout_line("max thickness", 3, &|m| m.max_thickness),
-                runout_line("centre-of-mass travel", 4, &|m| m.com_travel),
-            ],
-        )?;
         let p = solver.particles();
-        let column = match &r.grid {
-            GridBuilt::Terrain(t) => t.cell_width(),
-            GridBuilt::Regular(g) => g.cell_size().x,
-        };
-        let xs: Vec<f64> = p.position.iter().chain(&p.initial_position).map(|q| q.x).collect();
-        let lo = xs.iter().copied().fold(f64::INFINITY, f64::min) - 0.5;
-        let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.5;
-        let mut ground_sorted: Vec<(f64, f64)> = r
-            .ground
-            .iter()
-            .filter(|g| g.x > lo && g.x < hi)
-            .map(|g| (g.x, g.y))
-            .chain([lo, hi].map(|x| (x, ground_height(&r.ground, x))))
-            .collect();
-        ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let surface = summary::surface(&p.position, &r.ground, r.spacing, column);
-        let title = format!("Deposit at t = {:.3} s", solver.time());
-        plots::chart(
-            &plot_dir.join("deposit.png"),
-            &Chart {
-                title: &title,
-                x_label: "x (m)",
-                y_label: "y (m)",
-                size: (1000, 560),
-                equal_aspect: true,
-            },
-            &[
-                Series {
-                    name: "initial".into(),
-                    points: p.initial_position.iter().map(|q| (q.x, q.y)).collect(),
-                    style: Style::Points,
-                    color: 6,
-                },
-                Series {
-                    name: "final".into(),
-                    points: p.position.iter().map(|q| (q.x, q.y)).collect(),
-                    style: Style::Points,
-                    color: 0,
-                },
-                Series {
-                    name: "free surface".into(),
-                    points: surface.iter().map(|s| (s.0, s.1)).collect(),
-                    style: Style::Line,
-                    color: 1,
-                },
-                Series {
-                    name: "ground".into(),
-                    points: ground_sorted,
-                    style: Style::Thick,
-                    color: 5,
-                },
-            ],
-        )
+        let deposit =
+            Deposit { positions: &p.position, initial: &p.initial_position, time: solver.time() };
+        Ok(report::plots(&dir.join("plots"), self.scene, &self.history, &deposit)?)
     }
 }
 

@@ -6,11 +6,11 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::error::RunError;
+use crate::OutputError;
 
 /// the temporary name used for `path` (same directory, same extension so that writers which
 /// pick a format from the extension still work).
-pub(crate) fn temp_path(path: &Path) -> PathBuf {
+pub fn temp_path(path: &Path) -> PathBuf {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = match name.rsplit_once('.') {
         Some((stem, ext)) => format!(".{stem}.tmp-{}.{ext}", std::process::id()),
@@ -20,16 +20,16 @@ pub(crate) fn temp_path(path: &Path) -> PathBuf {
 }
 
 /// writes `bytes` to `path` atomically.
-pub(crate) fn write(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
+pub fn write(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let tmp = temp_path(path);
-    std::fs::write(&tmp, bytes).map_err(|source| RunError::Io { path: tmp.clone(), source })?;
+    std::fs::write(&tmp, bytes).map_err(|source| OutputError::Io { path: tmp.clone(), source })?;
     commit(&tmp, path)
 }
 
 /// writes `parts` one after the other to `path` atomically (no copy into one buffer).
-pub(crate) fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), RunError> {
+pub fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), OutputError> {
     let tmp = temp_path(path);
-    let io = |source| RunError::Io { path: tmp.clone(), source };
+    let io = |source| OutputError::Io { path: tmp.clone(), source };
     let mut file = std::fs::File::create(&tmp).map_err(io)?;
     for part in parts {
         if let Err(source) = file.write_all(part) {
@@ -43,16 +43,16 @@ pub(crate) fn write_parts(path: &Path, parts: &[&[u8]]) -> Result<(), RunError> 
 }
 
 /// appends `bytes` (whole lines) to the existing file at `path` with one `write_all`.
-pub(crate) fn append(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
-    let io = |source| RunError::Io { path: path.to_path_buf(), source };
+pub fn append(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
     let mut file = std::fs::OpenOptions::new().append(true).open(path).map_err(io)?;
     file.write_all(bytes).map_err(io)
 }
 
 /// renames a finished temporary file over its target.
-pub(crate) fn commit(tmp: &Path, path: &Path) -> Result<(), RunError> {
+pub fn commit(tmp: &Path, path: &Path) -> Result<(), OutputError> {
     std::fs::rename(tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(tmp);
-        RunError::Io { path: path.to_path_buf(), source }
+        OutputError::Io { path: path.to_path_buf(), source }
     })
 }

@@ -10,28 +10,36 @@ use mpm_scene::RunoutMetrics;
 use mpm_solver::EnergyLedger;
 use serde::{Deserialize, Serialize};
 
-use crate::error::RunError;
-use crate::output::atomic;
+use crate::OutputError;
+use crate::atomic;
 
 /// One row of `energy.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct EnergyRow {
+pub struct EnergyRow {
+    /// simulated time (s).
     pub time: f64,
+    /// step number.
     pub step: u64,
+    /// the step's Δt (s).
     pub dt: f64,
+    /// the energy ledger (J/m).
     pub ledger: EnergyLedger,
 }
 
 /// One row of `probes.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct ProbeRow {
+pub struct ProbeRow {
+    /// simulated time (s).
     pub time: f64,
     /// probe number (order in `output.probes`).
     pub probe: usize,
     /// particle index.
     pub particle: usize,
+    /// position (m).
     pub position: [f64; 2],
+    /// displacement from the initial position (m).
     pub displacement: [f64; 2],
+    /// velocity (m/s).
     pub velocity: [f64; 2],
     /// displacement along the reference direction (x without a reference).
     pub along: f64,
@@ -42,13 +50,13 @@ pub(crate) struct ProbeRow {
 /// brings the CSV file at `path` up to `rows`, of which `flushed` are on disk: the first flush
 /// of a session writes the header and every row atomically (replacing whatever the file held);
 /// later ones append only the new rows, with one write.
-pub(crate) fn flush<R>(
+pub fn flush<R>(
     path: &Path,
     header: &str,
     rows: &[R],
     flushed: &mut usize,
     lines: fn(&mut String, &[R]),
-) -> Result<(), RunError> {
+) -> Result<(), OutputError> {
     if *flushed == 0 {
         let mut text = String::from(header);
         lines(&mut text, rows);
@@ -63,19 +71,19 @@ pub(crate) fn flush<R>(
 }
 
 /// header line of `energy.csv`.
-pub(crate) const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_dissipation,\
+pub const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_dissipation,\
      friction_work,constraint_work,external_work,residual,stored,dissipated,total\n";
 
 /// header line of `probes.csv`.
-pub(crate) const PROBES_HEADER: &str =
+pub const PROBES_HEADER: &str =
     "time,probe,particle,x,y,ux,uy,vx,vy,displacement_along,reference_along\n";
 
 /// header line of `runout.csv`.
-pub(crate) const RUNOUT_HEADER: &str =
+pub const RUNOUT_HEADER: &str =
     "time,front_x,tail_x,leading_x,front_travel,max_thickness,com_x,com_y,com_travel\n";
 
 /// appends the lines of `rows` to `s`.
-pub(crate) fn energy(s: &mut String, rows: &[EnergyRow]) {
+pub fn energy(s: &mut String, rows: &[EnergyRow]) {
     for r in rows {
         let e = &r.ledger;
         let _ = writeln!(
@@ -100,7 +108,7 @@ pub(crate) fn energy(s: &mut String, rows: &[EnergyRow]) {
 }
 
 /// appends the lines of `rows` to `s`.
-pub(crate) fn probes(s: &mut String, rows: &[ProbeRow]) {
+pub fn probes(s: &mut String, rows: &[ProbeRow]) {
     for r in rows {
         let _ = write!(
             s,
@@ -124,7 +132,7 @@ pub(crate) fn probes(s: &mut String, rows: &[ProbeRow]) {
 }
 
 /// appends the lines of `rows` to `s`.
-pub(crate) fn runout(s: &mut String, rows: &[RunoutMetrics]) {
+pub fn runout(s: &mut String, rows: &[RunoutMetrics]) {
     for r in rows {
         let _ = writeln!(
             s,

@@ -24,16 +24,16 @@ use mpm_scene::{RunoutMetrics, SavedState};
 use mpm_solver::EnergyCheck;
 use serde::{Deserialize, Serialize};
 
-use crate::error::RunError;
-use crate::output::atomic;
-use crate::output::csv::{EnergyRow, ProbeRow};
+use crate::OutputError;
+use crate::atomic;
+use crate::csv::{EnergyRow, ProbeRow};
 
 /// Format version of the checkpoint file; bumped when its layout changes (2: the history
 /// carries the output time, the solver state the time step's reference densities; 3: the
 /// header with length and checksum, the history the energy check; 4: particle stresses carry
 /// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
 /// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse).
-pub(crate) const FORMAT: u32 = 6;
+pub const FORMAT: u32 = 6;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -50,19 +50,25 @@ const MAX_FILE: u64 = 1 << 36;
 
 /// Everything a checkpoint holds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct CheckpointFile {
+pub struct CheckpointFile {
+    /// the file format ([`FORMAT`]).
     pub format: u32,
+    /// the version of the code that wrote it.
     pub code_version: String,
+    /// where the scene came from (a path or `embedded:NAME`).
     pub origin: String,
+    /// the scene text that ran.
     pub scene_text: String,
+    /// the solver state.
     pub state: SavedState,
+    /// the output written so far.
     pub history: History,
 }
 
 /// writes `c` to `path` atomically, with its header.
-pub(crate) fn write(path: &Path, c: &CheckpointFile) -> Result<(), RunError> {
+pub fn write(path: &Path, c: &CheckpointFile) -> Result<(), OutputError> {
     let payload = bincode::serde::encode_to_vec(c, bincode::config::standard()).map_err(|e| {
-        RunError::Setup(format!("cannot encode the checkpoint {}: {e}", path.display()))
+        OutputError::Checkpoint { path: path.to_path_buf(), reason: format!("cannot encode: {e}") }
     })?;
     atomic::write_parts(path, &[&header(&payload), &payload])
 }
@@ -78,16 +84,16 @@ fn header(payload: &[u8]) -> Vec<u8> {
 }
 
 /// reads and verifies a checkpoint file (see the module docs).
-pub(crate) fn read(path: &Path) -> Result<CheckpointFile, RunError> {
-    let refuse = |reason: String| RunError::Checkpoint { path: path.to_path_buf(), reason };
+pub fn read(path: &Path) -> Result<CheckpointFile, OutputError> {
+    let refuse = |reason: String| OutputError::Checkpoint { path: path.to_path_buf(), reason };
     let size = std::fs::metadata(path)
-        .map_err(|source| RunError::Io { path: path.to_path_buf(), source })?
+        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?
         .len();
     if size > MAX_FILE {
         return Err(refuse(format!("{size} bytes, above the {MAX_FILE}-byte limit")));
     }
-    let bytes =
-        std::fs::read(path).map_err(|source| RunError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path)
+        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?;
     let payload = verify(&bytes).map_err(refuse)?;
     let (c, used): (CheckpointFile, usize) = decode(payload)
         .map_err(|e| refuse(format!("the checksum holds but the content does not decode ({e})")))?;
@@ -149,7 +155,7 @@ fn decode(payload: &[u8]) -> Result<(CheckpointFile, usize), bincode::error::Dec
 }
 
 /// FNV-1a 64 hash (hex) of a value's bincode bytes: equal for bit-identical values.
-pub(crate) fn state_hash<T: Serialize>(value: &T) -> String {
+pub fn state_hash<T: Serialize>(value: &T) -> String {
     let bytes =
         bincode::serde::encode_to_vec(value, bincode::config::standard()).unwrap_or_default();
     format!("{:016x}", mpm_scene::fnv1a(&bytes))
@@ -157,32 +163,42 @@ pub(crate) fn state_hash<T: Serialize>(value: &T) -> String {
 
 /// Output history carried in checkpoints so that a resumed run continues its files.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub(crate) struct History {
-    pub(crate) energy: Vec<EnergyRow>,
-    pub(crate) probes: Vec<ProbeRow>,
-    pub(crate) runout: Vec<RunoutMetrics>,
+pub struct History {
+    /// the rows of `energy.csv`.
+    pub energy: Vec<EnergyRow>,
+    /// the rows of `probes.csv`.
+    pub probes: Vec<ProbeRow>,
+    /// the rows of `runout.csv`.
+    pub runout: Vec<RunoutMetrics>,
     /// (time, file relative to the output directory).
-    pub(crate) frames: Vec<(f64, String)>,
+    pub frames: Vec<(f64, String)>,
     /// index k of the last frame time k·interval taken.
-    pub(crate) frame_slot: u64,
-    pub(crate) series_slot: u64,
-    pub(crate) checkpoint_slot: u64,
-    pub(crate) dt_min: f64,
-    pub(crate) dt_max: f64,
-    pub(crate) dt_first: f64,
-    /// wall time and particle-steps of earlier sessions.
-    pub(crate) wall_time: f64,
-    pub(crate) particle_steps: f64,
+    pub frame_slot: u64,
+    /// index k of the last series time k·interval taken.
+    pub series_slot: u64,
+    /// index k of the last checkpoint time k·interval taken.
+    pub checkpoint_slot: u64,
+    /// smallest Δt so far (s).
+    pub dt_min: f64,
+    /// largest Δt so far (s).
+    pub dt_max: f64,
+    /// the first Δt (s).
+    pub dt_first: f64,
+    /// wall time of earlier sessions (s).
+    pub wall_time: f64,
+    /// particle-steps of earlier sessions.
+    pub particle_steps: f64,
     /// wall time spent writing frames and time series, over all sessions (s).
     #[serde(default)]
-    pub(crate) output_time: f64,
-    pub(crate) initial: Option<RunoutMetrics>,
+    pub output_time: f64,
+    /// the runout measures at t = 0.
+    pub initial: Option<RunoutMetrics>,
     /// the energy residual against its scale, from the first series row on.
     #[serde(default)]
-    pub(crate) energy_check: Option<EnergyCheck>,
+    pub energy_check: Option<EnergyCheck>,
     /// when the energy alarm first tripped (s).
     #[serde(default)]
-    pub(crate) alarm_time: Option<f64>,
+    pub alarm_time: Option<f64>,
 }
 
 #[cfg(test)]

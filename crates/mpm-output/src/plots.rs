@@ -12,10 +12,10 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use crate::error::RunError;
-use crate::output::atomic;
+use crate::OutputError;
+use crate::atomic;
 
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
 /// registers the embedded font as plotters' "sans-serif" (once per process): plotters draws text
@@ -107,7 +107,7 @@ fn bounds(series: &[Series]) -> (f64, f64, f64, f64) {
 }
 
 /// draws `series` into the PNG at `path` (written atomically).
-pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), RunError> {
+pub fn chart(path: &Path, c: &Chart<'_>, series: &[Series]) -> Result<(), OutputError> {
     figure(path, &[(c.clone(), series)], 1, c.size)
 }
 
@@ -118,11 +118,11 @@ pub fn figure(
     panels: &[(Chart<'_>, &[Series])],
     columns: usize,
     size: (u32, u32),
-) -> Result<(), RunError> {
+) -> Result<(), OutputError> {
     register_font();
     let tmp = atomic::temp_path(path);
     let fail =
-        |e: String| RunError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
+        |e: String| OutputError::Io { path: path.to_path_buf(), source: std::io::Error::other(e) };
     let drawn = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;

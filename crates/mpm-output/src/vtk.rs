@@ -28,7 +28,7 @@ use mpm_solver::Particles;
 use rayon::prelude::*;
 
 /// uncompressed bytes per zlib block of the `compressed` format.
-pub(crate) const BLOCK: usize = 1 << 20;
+pub const BLOCK: usize = 1 << 20;
 
 /// zlib level of the `compressed` format (1 = fastest; higher levels gain a few per cent of
 /// size on particle data at several times the cost).
@@ -36,9 +36,12 @@ const LEVEL: u32 = 1;
 
 /// A frame's bytes: the XML (with `<AppendedData encoding="raw">_` at its end for the binary
 /// formats), the appended arrays and the closing tags, written one after the other.
-pub(crate) struct Frame {
+pub struct Frame {
+    /// the XML head.
     pub xml: String,
+    /// the appended binary arrays (empty for ASCII).
     pub data: Vec<u8>,
+    /// the closing tags.
     pub tail: &'static str,
 }
 
@@ -170,7 +173,7 @@ fn ascii_array<T: Scalar>(
 }
 
 /// one frame of particles at time `time` (s).
-pub(crate) fn frame<M: SceneModel>(
+pub fn frame<M: SceneModel>(
     p: &Particles<M::State>,
     materials: &[M],
     fields: &[VtkField],
@@ -269,7 +272,7 @@ pub(crate) fn frame<M: SceneModel>(
 }
 
 /// the ParaView collection of `frames` (time, file relative to the `.pvd`).
-pub(crate) fn pvd(frames: &[(f64, String)]) -> String {
+pub fn pvd(frames: &[(f64, String)]) -> String {
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\"?>\n");
     out.push_str("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n");

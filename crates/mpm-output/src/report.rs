@@ -1,0 +1,181 @@
+//! The PNG plots at the end of a run: the energy history, the probes against their analytic
+//! curve, the runout history and the final deposit over the ground.
+
+use std::path::Path;
+
+use mpm_scene::summary;
+use mpm_scene::{GridBuilt, RunoutMetrics, Scene, ground_height};
+use mpm_solver::Vector;
+
+use crate::OutputError;
+use crate::checkpoint::History;
+use crate::csv::EnergyRow;
+use crate::plots::{self, Chart, Series, Style};
+
+/// The particles drawn in the deposit plot.
+pub struct Deposit<'a> {
+    /// final positions (m).
+    pub positions: &'a [Vector],
+    /// initial positions (m).
+    pub initial: &'a [Vector],
+    /// simulated time of the final positions (s).
+    pub time: f64,
+}
+
+/// draws the run's plots into `plot_dir` from its `history` and the `deposit`.
+pub fn plots(
+    plot_dir: &Path,
+    scene: &Scene,
+    h: &History,
+    deposit: &Deposit<'_>,
+) -> Result<(), OutputError> {
+    let Deposit { positions, initial, time } = *deposit;
+    let r = scene.resolved();
+    let e0 = h.energy.first().map_or(0.0, |r| r.ledger.potential);
+    let line = |name: &str, color, f: &dyn Fn(&EnergyRow) -> f64| Series {
+        name: name.into(),
+        points: h.energy.iter().map(|row| (row.time, f(row))).collect(),
+        style: Style::Line,
+        color,
+    };
+    plots::chart(
+        &plot_dir.join("energy.png"),
+        &Chart {
+            title: "Energy history",
+            x_label: "time (s)",
+            y_label: "energy (J/m)",
+            size: (900, 560),
+            equal_aspect: false,
+        },
+        &[
+            line("kinetic", 0, &|r| r.ledger.kinetic),
+            line("strain", 2, &|r| r.ledger.strain),
+            line("potential − initial", 4, &|r| r.ledger.potential - e0),
+            line("dissipated", 1, &|r| r.ledger.dissipated()),
+            line("external work", 5, &|r| r.ledger.external_work),
+            line("residual (error)", 6, &|r| r.ledger.residual),
+        ],
+    )?;
+    if !r.output.probes.is_empty() {
+        let mut series = Vec::new();
+        for (k, &i) in r.output.probes.iter().enumerate() {
+            series.push(Series {
+                name: format!("particle {i}"),
+                points: h
+                    .probes
+                    .iter()
+                    .filter(|p| p.probe == k)
+                    .map(|p| (p.time, p.along))
+                    .collect(),
+                style: Style::Line,
+                color: k,
+            });
+        }
+        let label = match r.output.reference {
+            Some(rf) => {
+                let t_end = time;
+                let n = 200;
+                series.push(Series {
+                    name: format!("{} (rigid block)", rf.curve.name()),
+                    points: (0..=n)
+                        .map(|j| {
+                            let t = t_end * j as f64 / n as f64;
+                            (t, rf.displacement(t))
+                        })
+                        .collect(),
+                    style: Style::Dashed,
+                    color: 1,
+                });
+                if rf.direction == Vector::X {
+                    "displacement along x (m)"
+                } else if rf.direction == -Vector::X {
+                    "displacement along −x (m)"
+                } else {
+                    "displacement down the slope (m)"
+                }
+            }
+            None => "displacement along x (m)",
+        };
+        plots::chart(
+            &plot_dir.join("probes.png"),
+            &Chart {
+                title: "Probe displacement",
+                x_label: "time (s)",
+                y_label: label,
+                size: (900, 560),
+                equal_aspect: false,
+            },
+            &series,
+        )?;
+    }
+    let runout_line = |name: &str, color, f: &dyn Fn(&RunoutMetrics) -> f64| Series {
+        name: name.into(),
+        points: h.runout.iter().map(|m| (m.time, f(m))).collect(),
+        style: Style::Line,
+        color,
+    };
+    plots::chart(
+        &plot_dir.join("runout.png"),
+        &Chart {
+            title: "Runout",
+            x_label: "time (s)",
+            y_label: "position / thickness (m)",
+            size: (900, 560),
+            equal_aspect: false,
+        },
+        &[
+            runout_line("front x", 0, &|m| m.front_x),
+            runout_line("tail x", 2, &|m| m.tail_x),
+            runout_line("max thickness", 3, &|m| m.max_thickness),
+            runout_line("centre-of-mass travel", 4, &|m| m.com_travel),
+        ],
+    )?;
+    let column = match &r.grid {
+        GridBuilt::Terrain(t) => t.cell_width(),
+        GridBuilt::Regular(g) => g.cell_size().x,
+    };
+    let xs: Vec<f64> = positions.iter().chain(initial).map(|q| q.x).collect();
+    let lo = xs.iter().copied().fold(f64::INFINITY, f64::min) - 0.5;
+    let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.5;
+    let mut ground_sorted: Vec<(f64, f64)> = r
+        .ground
+        .iter()
+        .filter(|g| g.x > lo && g.x < hi)
+        .map(|g| (g.x, g.y))
+        .chain([lo, hi].map(|x| (x, ground_height(&r.ground, x))))
+        .collect();
+    ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let surface = summary::surface(positions, &r.ground, r.spacing, column);
+    let title = format!("Deposit at t = {:.3} s", time);
+    plots::chart(
+        &plot_dir.join("deposit.png"),
+        &Chart {
+            title: &title,
+            x_label: "x (m)",
+            y_label: "y (m)",
+            size: (1000, 560),
+            equal_aspect: true,
+        },
+        &[
+            Series {
+                name: "initial".into(),
+                points: initial.iter().map(|q| (q.x, q.y)).collect(),
+                style: Style::Points,
+                color: 6,
+            },
+            Series {
+                name: "final".into(),
+                points: positions.iter().map(|q| (q.x, q.y)).collect(),
+                style: Style::Points,
+                color: 0,
+            },
+            Series {
+                name: "free surface".into(),
+                points: surface.iter().map(|s| (s.0, s.1)).collect(),
+                style: Style::Line,
+                color: 1,
+            },
+            Series { name: "ground".into(), points: ground_sorted, style: Style::Thick, color: 5 },
+        ],
+    )
+}
