@@ -80,6 +80,7 @@ impl From<mpm_output::OutputError> for RunError {
             O::OutputExists(dir) => RunError::OutputExists(dir),
             O::Locked { dir, lock, pid } => RunError::Locked { dir, lock, pid },
             O::Checkpoint { path, reason } => RunError::Checkpoint { path, reason },
+            O::Encode(message) => RunError::Setup(message),
         }
     }
 }

@@ -415,6 +415,7 @@ mod tests {
                 m.update(&mut s, &mut st, &pull, 1e-4).unwrap().branch,
                 MuIBranch::SEPARATED
             );
+            assert_eq!(s, SymTensor::ZERO);
         }
         assert!((st.opening - 3e-3).abs() <= 1e-15);
         // compact by 2e-3: still loose, no stress.
@@ -434,6 +435,27 @@ mod tests {
         let p = -s.mean();
         assert!((p - k * 0.5e-3).abs() <= 1e-9 * p, "p = {p}, K e = {}", k * 0.5e-3);
         assert!(s.deviator().j2() <= 1e-20 * p * p);
+    }
+
+    /// An increment that closes the opening and then shears the re-formed material into flow
+    /// is the update from zero stress of the part after closure, over its share of Δt.
+    #[test]
+    fn a_closing_step_that_shears_flows_over_its_share_of_the_step() {
+        let m = beads();
+        let opening = 1e-3;
+        let st0 = MuIState { opening, ..m.initial_state() };
+        // compaction 3e-3 (closure after a third) with a shear that flows at the pressure
+        // reached.
+        let d = SymTensor::new(-1e-3, -1e-3, -1e-3, 2e-3, 0.0, 0.0);
+        let dt = 1e-4;
+        let (mut s, mut st) = (SymTensor::ZERO, st0);
+        let rep = m.update(&mut s, &mut st, &d, dt).unwrap();
+        assert_eq!(rep.branch, MuIBranch::FLOWING);
+        let f = 2.0 / 3.0;
+        let (mut s_ref, mut st_ref) = (SymTensor::ZERO, m.initial_state());
+        let rep_ref = m.update(&mut s_ref, &mut st_ref, &(d * f), dt * f).unwrap();
+        assert_eq!(rep, rep_ref);
+        assert_eq!((s, st), (s_ref, st_ref));
     }
 
     #[test]

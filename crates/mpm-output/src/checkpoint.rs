@@ -16,7 +16,7 @@
 //! times the payload's size, so between 16 and 256 times it (the largest expansion of any field
 //! is below 16: a `u16` material index is one varint byte), so even a checksummed file with a
 //! crafted length field cannot make it allocate more. What it decodes is
-//! checked again against the scene before the solver takes it (`run::resume`).
+//! checked again against the scene before the solver takes it (`mpm_cli::resume`).
 
 use std::path::Path;
 
@@ -68,7 +68,7 @@ pub struct CheckpointFile {
 /// writes `c` to `path` atomically, with its header.
 pub fn write(path: &Path, c: &CheckpointFile) -> Result<(), OutputError> {
     let payload = bincode::serde::encode_to_vec(c, bincode::config::standard()).map_err(|e| {
-        OutputError::Checkpoint { path: path.to_path_buf(), reason: format!("cannot encode: {e}") }
+        OutputError::Encode(format!("cannot encode the checkpoint {}: {e}", path.display()))
     })?;
     atomic::write_parts(path, &[&header(&payload), &payload])
 }

@@ -56,7 +56,10 @@ pub enum OutputError {
         /// the holder's process id.
         pid: u32,
     },
-    /// a checkpoint could not be read, or could not be encoded.
+    /// a state could not be encoded (a fault of this program, not of its input).
+    #[error("{0}")]
+    Encode(String),
+    /// a checkpoint could not be read or does not fit its scene.
     #[error("checkpoint {}: {reason}", path.display())]
     Checkpoint {
         /// the checkpoint file.

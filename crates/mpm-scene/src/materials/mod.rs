@@ -4,8 +4,9 @@
 //! # Adding a model
 //! 1. Write the model in `mpm-constitutive` (a [`ConstitutiveModel`]: Δt reaches `update`, the
 //!    time step asks `p_wave_modulus`, return branches are named by `BRANCHES`).
-//! 2. Add a file here implementing [`SceneMaterial`] for it: the `kind` name, its parameter
-//!    table (a `#[serde(deny_unknown_fields)]` struct) and how the table builds the model.
+//! 2. Add a file here implementing [`SceneMaterial`] for it: the `KIND` name, the `TITLE` of
+//!    messages, whether `OBJECTIVE_STRESS` defaults on, its parameter table (a
+//!    `#[serde(deny_unknown_fields)]` struct) and how the table builds the model.
 //! 3. Add one line to the registry: `Variant(Model)` under `models`, and the run types it
 //!    stores in checkpoints under `states` (append only: a variant's position is part of the
 //!    checkpoint format).

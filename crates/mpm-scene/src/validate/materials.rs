@@ -85,6 +85,7 @@ pub(super) fn build<'a>(
                 let path = if inner == "." { base.clone() } else { join(&base, &inner) };
                 let mut e = describe(ctx, &message, path, None);
                 if e.problem.starts_with("unknown field") {
+                    e.admissible = format!("{} (besides `kind` and `density`)", e.admissible);
                     e.fix = format!(
                         "remove it or correct its spelling, or change `kind` (\"{kind}\") to \
                          the model it belongs to (docs/scene-format.md lists each model's fields)"
