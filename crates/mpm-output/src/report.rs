@@ -29,8 +29,17 @@ pub fn plots(
     h: &History,
     deposit: &Deposit<'_>,
 ) -> Result<(), OutputError> {
-    let Deposit { positions, initial, time } = *deposit;
     let r = scene.resolved();
+    energy(plot_dir, h)?;
+    if !r.output.probes.is_empty() {
+        probes(plot_dir, scene, h, deposit.time)?;
+    }
+    runout(plot_dir, h)?;
+    final_deposit(plot_dir, scene, deposit)
+}
+
+/// `energy.png`: the ledger's terms over time.
+fn energy(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
     let e0 = h.energy.first().map_or(0.0, |r| r.ledger.potential);
     let line = |name: &str, color, f: &dyn Fn(&EnergyRow) -> f64| Series {
         name: name.into(),
@@ -56,58 +65,62 @@ pub fn plots(
             line("residual (error)", 6, &|r| r.ledger.residual),
         ],
     )?;
-    if !r.output.probes.is_empty() {
-        let mut series = Vec::new();
-        for (k, &i) in r.output.probes.iter().enumerate() {
-            series.push(Series {
-                name: format!("particle {i}"),
-                points: h
-                    .probes
-                    .iter()
-                    .filter(|p| p.probe == k)
-                    .map(|p| (p.time, p.along))
-                    .collect(),
-                style: Style::Line,
-                color: k,
-            });
-        }
-        let label = match r.output.reference {
-            Some(rf) => {
-                let t_end = time;
-                let n = 200;
-                series.push(Series {
-                    name: format!("{} (rigid block)", rf.curve.name()),
-                    points: (0..=n)
-                        .map(|j| {
-                            let t = t_end * j as f64 / n as f64;
-                            (t, rf.displacement(t))
-                        })
-                        .collect(),
-                    style: Style::Dashed,
-                    color: 1,
-                });
-                if rf.direction == Vector::X {
-                    "displacement along x (m)"
-                } else if rf.direction == -Vector::X {
-                    "displacement along −x (m)"
-                } else {
-                    "displacement down the slope (m)"
-                }
-            }
-            None => "displacement along x (m)",
-        };
-        plots::chart(
-            &plot_dir.join("probes.png"),
-            &Chart {
-                title: "Probe displacement",
-                x_label: "time (s)",
-                y_label: label,
-                size: (900, 560),
-                equal_aspect: false,
-            },
-            &series,
-        )?;
+    Ok(())
+}
+
+/// `probes.png`: the probes' displacement, with the scene's analytic curve.
+fn probes(plot_dir: &Path, scene: &Scene, h: &History, time: f64) -> Result<(), OutputError> {
+    let r = scene.resolved();
+    let mut series = Vec::new();
+    for (k, &i) in r.output.probes.iter().enumerate() {
+        series.push(Series {
+            name: format!("particle {i}"),
+            points: h.probes.iter().filter(|p| p.probe == k).map(|p| (p.time, p.along)).collect(),
+            style: Style::Line,
+            color: k,
+        });
     }
+    let label = match r.output.reference {
+        Some(rf) => {
+            let t_end = time;
+            let n = 200;
+            series.push(Series {
+                name: format!("{} (rigid block)", rf.curve.name()),
+                points: (0..=n)
+                    .map(|j| {
+                        let t = t_end * j as f64 / n as f64;
+                        (t, rf.displacement(t))
+                    })
+                    .collect(),
+                style: Style::Dashed,
+                color: 1,
+            });
+            if rf.direction == Vector::X {
+                "displacement along x (m)"
+            } else if rf.direction == -Vector::X {
+                "displacement along −x (m)"
+            } else {
+                "displacement down the slope (m)"
+            }
+        }
+        None => "displacement along x (m)",
+    };
+    plots::chart(
+        &plot_dir.join("probes.png"),
+        &Chart {
+            title: "Probe displacement",
+            x_label: "time (s)",
+            y_label: label,
+            size: (900, 560),
+            equal_aspect: false,
+        },
+        &series,
+    )?;
+    Ok(())
+}
+
+/// `runout.png`: front, tail and centre-of-mass travel over time.
+fn runout(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
     let runout_line = |name: &str, color, f: &dyn Fn(&RunoutMetrics) -> f64| Series {
         name: name.into(),
         points: h.runout.iter().map(|m| (m.time, f(m))).collect(),
@@ -130,6 +143,14 @@ pub fn plots(
             runout_line("centre-of-mass travel", 4, &|m| m.com_travel),
         ],
     )?;
+    Ok(())
+}
+
+/// `deposit.png`: the particles at the end over their initial place, the free surface and the
+/// ground.
+fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Result<(), OutputError> {
+    let Deposit { positions, initial, time } = *deposit;
+    let r = scene.resolved();
     let column = match &r.grid {
         GridBuilt::Terrain(t) => t.cell_width(),
         GridBuilt::Regular(g) => g.cell_size().x,
