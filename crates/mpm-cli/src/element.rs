@@ -10,6 +10,8 @@ use std::path::PathBuf;
 use mpm_constitutive::element_test::{simple_shear, uniaxial_plane_strain};
 use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor};
 
+use mpm_output::OutputError;
+
 use crate::error::RunError;
 
 /// (label, first plot's points, second plot's points) of one case.
@@ -92,9 +94,10 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
     let dir = &o.out_dir;
     let csv_path = dir.join("element_test.csv");
     if csv_path.exists() && !o.force {
-        return Err(RunError::OutputExists(dir.clone()));
+        return Err(OutputError::OutputExists(dir.clone()).into());
     }
-    std::fs::create_dir_all(dir).map_err(|source| RunError::Io { path: dir.clone(), source })?;
+    std::fs::create_dir_all(dir)
+        .map_err(|source| RunError::from(OutputError::Io { path: dir.clone(), source }))?;
     let mut csv = String::from(
         "case,psi_deg,mixing,step,eps_xx,eps_yy,eps_zz,gamma_xy,eps_vol,sigma_xx,sigma_yy,\
          sigma_zz,sigma_xy,eps_p_bar,surface\n",

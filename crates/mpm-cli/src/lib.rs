@@ -46,6 +46,7 @@ mod run;
 
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
+pub use mpm_output::OutputError;
 pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};

@@ -14,8 +14,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mpm_cli::{
-    DEFAULT_SCENE, ElementTest, ElementTestOptions, RunError, RunOptions, RunStatus, RunSummary,
-    SCENES, Scene, SceneError,
+    DEFAULT_SCENE, ElementTest, ElementTestOptions, OutputError, RunError, RunOptions, RunStatus,
+    RunSummary, SCENES, Scene, SceneError,
 };
 
 #[derive(Parser)]
@@ -356,9 +356,9 @@ fn scene_failure(e: &SceneError) -> ExitCode {
 fn run_failure(e: &RunError) -> ExitCode {
     eprintln!("error: {e}");
     match e {
-        RunError::Scene(_) | RunError::Checkpoint { .. } | RunError::Arguments(_) => {
-            ExitCode::from(2)
-        }
+        RunError::Scene(_)
+        | RunError::Output(OutputError::Checkpoint { .. })
+        | RunError::Arguments(_) => ExitCode::from(2),
         RunError::Solver { .. } => ExitCode::from(3),
         _ => ExitCode::from(1),
     }

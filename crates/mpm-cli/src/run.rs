@@ -24,7 +24,7 @@ use mpm_output::checkpoint::{self, CheckpointFile, History};
 use mpm_output::csv::{self, EnergyRow, ProbeRow};
 use mpm_output::dir::{DirLock, prepare_dir};
 use mpm_output::report::{self, Deposit};
-use mpm_output::{atomic, vtk};
+use mpm_output::{OutputError, atomic, vtk};
 
 use crate::error::RunError;
 use crate::progress::Progress;
@@ -161,17 +161,17 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
 pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let path = dir.join(checkpoint::FILE_NAME);
     if !path.exists() {
-        return Err(RunError::Checkpoint {
+        return Err(RunError::Output(OutputError::Checkpoint {
             path,
             reason: "no checkpoint in this directory (a run writes one on Ctrl-C and every \
                      output.checkpoint_interval)"
                 .into(),
-        });
+        }));
     }
     let _lock = DirLock::acquire(dir)?;
     let c = checkpoint::read(&path)?;
     let scene = load_scene_str(&c.scene_text, &c.origin)?;
-    fits_its_scene(&c, &scene).map_err(|reason| RunError::Checkpoint { path, reason })?;
+    fits_its_scene(&c, &scene).map_err(|reason| OutputError::Checkpoint { path, reason })?;
     with_pool(opts, scene.resolved().seeds.len(), |threads| {
         dispatch::dispatch(
             &scene,
@@ -262,10 +262,10 @@ impl Job for RunJob<'_> {
             Some((state, history)) => {
                 let dir = self.out_dir.clone().unwrap_or_default();
                 let Some(c) = M::unwrap(state) else {
-                    return Err(RunError::Checkpoint {
+                    return Err(RunError::Output(OutputError::Checkpoint {
                         path: dir.join(checkpoint::FILE_NAME),
                         reason: "its material model does not match its scene".into(),
-                    });
+                    }));
                 };
                 let s = Solver::from_checkpoint(shape, materials, r.config.clone(), c)
                     .map_err(|e| setup_error(scene, &e.to_string()))?;
@@ -515,7 +515,7 @@ impl Driver<'_> {
             r.output.vtk_format,
             solver.time(),
         )
-        .map_err(|source| RunError::Io { path: path.clone(), source })?;
+        .map_err(|source| RunError::from(OutputError::Io { path: path.clone(), source }))?;
         atomic::write_parts(&path, &frame.parts())?;
         self.history.frames.push((solver.time(), name));
         // The collection is small (a line per frame): rewritten whole, atomically.
@@ -749,7 +749,7 @@ mod tests {
             checkpoint::write(&path, &bad).unwrap();
             let RunOptions { threads, quiet, .. } = opts.clone();
             let e = resume(&dir, &RunOptions { threads, quiet, ..Default::default() }).unwrap_err();
-            assert!(matches!(e, RunError::Checkpoint { .. }), "{expect}: {e}");
+            assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{expect}: {e}");
             assert!(e.to_string().contains(expect), "{expect}: {e}");
         }
         std::fs::remove_dir_all(&dir).unwrap();

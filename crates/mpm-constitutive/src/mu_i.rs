@@ -52,8 +52,10 @@ use crate::error::ConstitutiveError;
 use crate::model::{Branch, ConstitutiveModel, TangentModel, UpdateReport, check_finite};
 use crate::tensor::{SymTensor, Tangent};
 
-/// Parameters of [`MuI`] (SI units).
+/// Parameters of [`MuI`] (SI units). As a serde table (a scene's `[materials.NAME]` with
+/// `kind = "mu_i"`) it refuses unknown fields.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MuIParams {
     /// Young's modulus `E` of the granular skeleton (Pa), > 0.
     pub young: f64,

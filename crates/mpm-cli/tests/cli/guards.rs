@@ -6,8 +6,8 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use mpm_cli::{
-    CHECKPOINT_FILE, RunError, RunOptions, RunStatus, embedded_scene, load_scene_str, resume,
-    run_scene,
+    CHECKPOINT_FILE, OutputError, RunError, RunOptions, RunStatus, embedded_scene, load_scene_str,
+    resume, run_scene,
 };
 
 use crate::temp_dir;
@@ -104,7 +104,7 @@ fn single_bit_flips_of_a_checkpoint_are_refused_not_resumed_to_another_answer() 
         bad[bit / 8] ^= 1 << (bit % 8);
         std::fs::write(&path, &bad).unwrap();
         let e = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
-        assert!(matches!(e, RunError::Checkpoint { .. }), "bit {bit}: {e}");
+        assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "bit {bit}: {e}");
     }
     // truncated
     std::fs::write(&path, &good[..good.len() / 2]).unwrap();

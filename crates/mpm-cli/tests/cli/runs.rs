@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use mpm_cli::{
-    CHECKPOINT_FILE, RunError, RunOptions, RunStatus, Scene, embedded_scene, load_scene_str,
-    resume, run_scene,
+    CHECKPOINT_FILE, OutputError, RunError, RunOptions, RunStatus, Scene, embedded_scene,
+    load_scene_str, resume, run_scene,
 };
 
 use crate::temp_dir;
@@ -246,7 +246,7 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     // bincode's varint 1 (the format before the history carried the output time), then junk
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
     let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
-    assert!(matches!(err, RunError::Checkpoint { .. }), "{err}");
+    assert!(matches!(err, RunError::Output(OutputError::Checkpoint { .. })), "{err}");
     assert!(err.to_string().contains("format 1 but this mpm reads format 6"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -270,7 +270,7 @@ fn an_existing_output_directory_is_refused_and_left_untouched() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("keep.txt"), "mine").unwrap();
     let err = run_scene(&short("free_fall", 0.01), &opts(&dir)).unwrap_err();
-    assert!(matches!(err, RunError::OutputExists(_)), "{err}");
+    assert!(matches!(err, RunError::Output(OutputError::OutputExists(_))), "{err}");
     assert!(err.to_string().contains("--force"));
     let names: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.file_name()).collect();
     assert_eq!(names, vec![std::ffi::OsString::from("keep.txt")]);

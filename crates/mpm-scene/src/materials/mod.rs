@@ -21,7 +21,6 @@ mod mu_i;
 
 pub use drucker_prager::{ConeMatchSpec, DruckerPragerSpec};
 pub use elastic::ElasticSpec;
-pub use mu_i::MuISpec;
 
 use mpm_constitutive::{
     ConstitutiveError, ConstitutiveModel, DpPerfectState, DruckerPrager, LinearElastic, MuI,
