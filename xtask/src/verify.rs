@@ -431,7 +431,7 @@ pub fn run(quick: bool) -> Result<bool> {
     ));
 
     // The open core: periodic sides, μ(I) rheology.
-    let open_panels = open_core::rows(&mut rows);
+    let open_panels = open_core::rows(&mut rows, quick);
     figures.push((
         "open_core.png",
         "μ(I) flow down a periodic slope against Bagnold",
