@@ -1,0 +1,120 @@
+//! What can go wrong with a raster: each variant names the file and where in it.
+
+/// A raster that cannot be read or used. `file` is the path as given.
+#[derive(Debug, thiserror::Error)]
+pub enum DemError {
+    /// The file cannot be opened or read.
+    #[error("{file}: cannot read the raster: {source}")]
+    Io {
+        /// the raster's path.
+        file: String,
+        /// the operating system's error.
+        source: std::io::Error,
+    },
+    /// The file's name does not say which format it is.
+    #[error(
+        "{file}: unknown raster format (expected an ESRI ASCII grid `.asc` or a GeoTIFF `.tif`/`.tiff`)"
+    )]
+    UnknownFormat {
+        /// the raster's path.
+        file: String,
+    },
+    /// A header line of an ASCII grid is missing, repeated or malformed.
+    #[error("{file}, line {line}: {problem}")]
+    Header {
+        /// the raster's path.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// what is wrong and what was expected.
+        problem: String,
+    },
+    /// A height value is not a number, or the values stop before the declared size.
+    #[error("{file}, line {line}: {problem}")]
+    Data {
+        /// the raster's path.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// what is wrong.
+        problem: String,
+    },
+    /// The declared size cannot be right: larger than the file can hold or than [`MAX_CELLS`].
+    ///
+    /// [`MAX_CELLS`]: crate::MAX_CELLS
+    #[error("{file}: declares {cols} × {rows} cells, {problem}")]
+    Size {
+        /// the raster's path.
+        file: String,
+        /// declared columns.
+        cols: u64,
+        /// declared rows.
+        rows: u64,
+        /// why that size is refused.
+        problem: String,
+    },
+    /// The cells are not square on the ground (`dx ≠ dy`), e.g. a raster in degrees.
+    #[error(
+        "{file}: cells of {dx} × {dy} are not square; reproject the raster to a metric projection with square cells (e.g. UTM)"
+    )]
+    NonSquareCells {
+        /// the raster's path.
+        file: String,
+        /// cell size along x (east).
+        dx: f64,
+        /// cell size along y (north).
+        dy: f64,
+    },
+    /// A GeoTIFF that cannot be decoded, or whose georeferencing is missing or unsupported.
+    #[error("{file}: {problem}")]
+    GeoTiff {
+        /// the raster's path.
+        file: String,
+        /// what is wrong.
+        problem: String,
+    },
+    /// The section needs a cell that holds nodata.
+    #[error(
+        "{file}: cell (row {row}, column {col}) holds nodata and is needed for the height at ({x}, {y}); fill the hole or move the line"
+    )]
+    Nodata {
+        /// the raster's path.
+        file: String,
+        /// 0-based row, counted from the north (the file's first row).
+        row: usize,
+        /// 0-based column, counted from the west.
+        col: usize,
+        /// map x of the point asked for.
+        x: f64,
+        /// map y of the point asked for.
+        y: f64,
+    },
+    /// A point of the section lies outside the raster.
+    #[error(
+        "{file}: the point ({x}, {y}) is outside the raster, which covers x ∈ [{x_min}, {x_max}], y ∈ [{y_min}, {y_max}]"
+    )]
+    Outside {
+        /// the raster's path.
+        file: String,
+        /// map x of the point.
+        x: f64,
+        /// map y of the point.
+        y: f64,
+        /// western edge.
+        x_min: f64,
+        /// eastern edge.
+        x_max: f64,
+        /// southern edge.
+        y_min: f64,
+        /// northern edge.
+        y_max: f64,
+    },
+    /// The section's line or spacing is unusable.
+    #[error("{file}: {problem}")]
+    Line {
+        /// the raster's path.
+        file: String,
+        /// what is wrong.
+        problem: String,
+    },
+}

@@ -1,0 +1,166 @@
+//! GeoTIFF elevation rasters (`.tif`, `.tiff`) through the pure-Rust `tiff` crate: one band of
+//! integer or floating-point heights, uncompressed, LZW or deflate, in strips or tiles.
+//!
+//! Georeferencing is read from the GeoTIFF tags a north-up raster carries:
+//! `ModelPixelScaleTag` (33550, the cell sizes `[sx, sy, sz]`) and `ModelTiepointTag` (33922,
+//! the raster point `(i, j)` that sits at map point `(X, Y)`). The raster type
+//! (`GTRasterTypeGeoKey` in the `GeoKeyDirectoryTag`) says whether `(i, j) = (0, 0)` is the
+//! north-west corner of the first cell (PixelIsArea, the default) or its centre (PixelIsPoint).
+//! GDAL's `GDAL_NODATA` tag (42113) gives the holes. A rotated or sheared raster
+//! (`ModelTransformationTag` only) and cells that are not square are refused.
+
+use std::fs::File;
+use std::io::{BufReader, BufWriter};
+use std::path::Path;
+
+use tiff::decoder::{Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+
+use crate::error::DemError;
+use crate::raster::{MAX_CELLS, Raster};
+
+/// GTRasterTypeGeoKey, and its PixelIsPoint value.
+const RASTER_TYPE_KEY: u16 = 1025;
+const PIXEL_IS_POINT: u16 = 2;
+
+/// Reads the GeoTIFF at `path` (its first image).
+pub fn read(path: &Path) -> Result<Raster, DemError> {
+    let file = path.display().to_string();
+    let io = |source| DemError::Io { file: file.clone(), source };
+    let problem = |p: String| DemError::GeoTiff { file: file.clone(), problem: p };
+    let tiff = |e: tiff::TiffError| problem(format!("not a readable TIFF: {e}"));
+    let f = File::open(path).map_err(io)?;
+    let bytes = f.metadata().map_err(io)?.len();
+    let mut limits = Limits::default();
+    // the decoder refuses, before allocating, an image larger than this
+    limits.decoding_buffer_size = (MAX_CELLS * 8) as usize;
+    let mut d = Decoder::new(BufReader::new(f)).map_err(tiff)?.with_limits(limits);
+    let (w, h) = d.dimensions().map_err(tiff)?;
+    let (cols, rows) = (u64::from(w), u64::from(h));
+    let size = |p: String| DemError::Size { file: file.clone(), cols, rows, problem: p };
+    if cols * rows > MAX_CELLS {
+        return Err(size(format!("more than the {MAX_CELLS} cells a raster may have")));
+    }
+    let bits = match d.colortype().map_err(tiff)? {
+        tiff::ColorType::Gray(b) => u64::from(b),
+        other => {
+            return Err(problem(format!(
+                "{other:?} pixels: an elevation raster has one band of heights"
+            )));
+        }
+    };
+    let compression: u16 = d.find_tag_unsigned(Tag::Compression).map_err(tiff)?.unwrap_or(1);
+    if compression == 1 && cols * rows * bits / 8 > bytes {
+        return Err(size(format!(
+            "{} bytes of uncompressed heights, but the file has {bytes} bytes (truncated?)",
+            cols * rows * bits / 8
+        )));
+    }
+    let f64s = |tag: Tag, d: &mut Decoder<BufReader<File>>| -> Result<Option<Vec<f64>>, DemError> {
+        d.find_tag(tag)
+            .map_err(tiff)?
+            .map(|v| v.into_f64_vec().map_err(|e| problem(format!("tag {tag:?}: {e}"))))
+            .transpose()
+    };
+    let scale = f64s(Tag::ModelPixelScaleTag, &mut d)?;
+    let tie = f64s(Tag::ModelTiepointTag, &mut d)?;
+    let (scale, tie) = match (scale, tie) {
+        (Some(s), Some(t)) if s.len() >= 2 && t.len() >= 6 => (s, t),
+        _ => {
+            let why = if d.find_tag(Tag::ModelTransformationTag).map_err(tiff)?.is_some() {
+                "it is placed by a ModelTransformationTag (rotated or sheared); warp it north-up \
+                 (e.g. `gdalwarp`)"
+            } else {
+                "it has no ModelPixelScaleTag and ModelTiepointTag: it is a plain TIFF, not a \
+                 GeoTIFF; export the DEM as a GeoTIFF or an ESRI ASCII grid"
+            };
+            return Err(problem(format!("cannot place the raster on the map: {why}")));
+        }
+    };
+    let (sx, sy) = (scale[0], scale[1]);
+    if !(sx.is_finite() && sx > 0.0 && sy.is_finite() && sy > 0.0) {
+        return Err(problem(format!("pixel scale ({sx}, {sy}) is not two positive lengths")));
+    }
+    if (sx - sy).abs() > 1e-9 * sx.max(sy) {
+        return Err(DemError::NonSquareCells { file: file.clone(), dx: sx, dy: sy });
+    }
+    let point = d
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .map_err(tiff)?
+        .and_then(|v| v.into_u16_vec().ok())
+        .is_some_and(|keys| {
+            keys.get(4..)
+                .unwrap_or(&[])
+                .chunks_exact(4)
+                .any(|k| k[0] == RASTER_TYPE_KEY && k[1] == 0 && k[3] == PIXEL_IS_POINT)
+        });
+    // the map point of raster point (0, 0): the first cell's corner, or its centre
+    let (i, j, x, y) = (tie[0], tie[1], tie[3], tie[4]);
+    let shift = if point { 0.5 } else { 0.0 };
+    let west = x - (i + shift) * sx;
+    let north = y + (j + shift) * sy;
+    let nodata = match d.find_tag(Tag::GdalNodata).map_err(tiff)? {
+        Some(v) => {
+            let s = v.into_string().map_err(|e| problem(format!("GDAL_NODATA tag: {e}")))?;
+            let s = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+            Some(
+                s.parse::<f64>()
+                    .map_err(|_| problem(format!("GDAL_NODATA tag `{s}` is not a number")))?,
+            )
+        }
+        None => None,
+    };
+    let z = match d.read_image().map_err(|e| problem(format!("cannot decode the heights: {e}")))? {
+        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::F32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::F64(v) => v,
+        other => {
+            return Err(problem(format!(
+                "heights stored as {}: use 8–32-bit integers or 32/64-bit floats",
+                match other {
+                    DecodingResult::U64(_) | DecodingResult::I64(_) => "64-bit integers",
+                    _ => "16-bit floats",
+                }
+            )));
+        }
+    };
+    // a nodata value given as text for float heights compares at the heights' precision
+    let nodata = nodata.map(|d| match z.iter().find(|v| (**v - d).abs() <= 1e-6 * d.abs()) {
+        Some(&v) => v,
+        None => d,
+    });
+    Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)
+}
+
+/// Writes `raster` as a single-band 64-bit float GeoTIFF (uncompressed, PixelIsArea, with
+/// `GDAL_NODATA` if it has holes): a file that GDAL, QGIS and [`read`] take.
+pub fn write(raster: &Raster, path: &Path) -> Result<(), DemError> {
+    let file = path.display().to_string();
+    let fail = |e: tiff::TiffError| DemError::GeoTiff {
+        file: file.clone(),
+        problem: format!("cannot write: {e}"),
+    };
+    let out = File::create(path).map_err(|source| DemError::Io { file: file.clone(), source })?;
+    let mut enc = tiff::encoder::TiffEncoder::new(BufWriter::new(out)).map_err(fail)?;
+    let [cols, rows] = raster.size();
+    let mut image = enc
+        .new_image::<tiff::encoder::colortype::Gray64Float>(cols as u32, rows as u32)
+        .map_err(fail)?;
+    let [west, _, _, north] = raster.extent();
+    let c = raster.cell();
+    let d = image.encoder();
+    d.write_tag(Tag::ModelPixelScaleTag, &[c, c, 0.0][..]).map_err(fail)?;
+    d.write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, west, north, 0.0][..]).map_err(fail)?;
+    // GeoKeyDirectory: version 1.1.0, one key: GTRasterTypeGeoKey = PixelIsArea
+    d.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 1, RASTER_TYPE_KEY, 0, 1, 1][..])
+        .map_err(fail)?;
+    if let Some(nd) = raster.nodata() {
+        d.write_tag(Tag::GdalNodata, format!("{nd:?}").as_str()).map_err(fail)?;
+    }
+    image.write_data(raster.heights()).map_err(fail)
+}

@@ -1,0 +1,285 @@
+//! The raster: a north-up grid of square cells with one height at each cell's centre, its
+//! bilinear interpolation, and sections along a line.
+
+use crate::error::DemError;
+
+/// The most cells a raster may declare (2²⁸ = 268 M cells, 2 GiB of heights): a guard against a
+/// corrupt header, far above a slope's DEM (a 10 km × 10 km area at 1 m is 100 M cells).
+pub const MAX_CELLS: u64 = 1 << 28;
+
+/// The most stations a section may have: a guard against a spacing typed in the wrong unit.
+pub const MAX_STATIONS: usize = 10_000_000;
+
+/// A north-up elevation raster with square cells. Heights are at the cells' centres; row 0 is
+/// the northern row (the first in an ASCII grid or a GeoTIFF), column 0 the western one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Raster {
+    file: String,
+    cols: usize,
+    rows: usize,
+    cell: f64,
+    west: f64,
+    north: f64,
+    z: Vec<f64>,
+    nodata: Option<f64>,
+}
+
+/// One point of a section: its distance along the line from its start, its map position and
+/// the interpolated ground height (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Station {
+    /// distance from the line's start (m).
+    pub station: f64,
+    /// map x (east, m).
+    pub x: f64,
+    /// map y (north, m).
+    pub y: f64,
+    /// ground height (m).
+    pub z: f64,
+}
+
+impl Raster {
+    /// A raster of `cols × rows` square cells of size `cell`, with its north-west corner at
+    /// (`west`, `north`) and heights `z` row by row from the north. `file` names it in errors.
+    /// Values equal to `nodata`, and non-finite values, are holes.
+    pub fn new(
+        file: &str,
+        [cols, rows]: [usize; 2],
+        cell: f64,
+        [west, north]: [f64; 2],
+        z: Vec<f64>,
+        nodata: Option<f64>,
+    ) -> Result<Self, DemError> {
+        let size = |problem: String| DemError::Size {
+            file: file.into(),
+            cols: cols as u64,
+            rows: rows as u64,
+            problem,
+        };
+        if cols == 0 || rows == 0 {
+            return Err(size("a raster needs at least one cell".into()));
+        }
+        if (cols as u64).saturating_mul(rows as u64) > MAX_CELLS {
+            return Err(size(format!("more than the {MAX_CELLS} cells a raster may have")));
+        }
+        if z.len() != cols * rows {
+            return Err(size(format!("but {} heights are given", z.len())));
+        }
+        if !(cell.is_finite() && cell > 0.0) {
+            return Err(DemError::Line {
+                file: file.into(),
+                problem: format!("cell size {cell} is not a positive length"),
+            });
+        }
+        if !(west.is_finite() && north.is_finite()) {
+            return Err(DemError::Line {
+                file: file.into(),
+                problem: format!("corner ({west}, {north}) is not a finite map point"),
+            });
+        }
+        Ok(Self { file: file.into(), cols, rows, cell, west, north, z, nodata })
+    }
+
+    /// Reads a raster, choosing the format by the file's extension: `.asc` is an ESRI ASCII
+    /// grid, `.tif`/`.tiff` a GeoTIFF.
+    pub fn read(path: &std::path::Path) -> Result<Self, DemError> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("asc") => crate::ascii::read(path),
+            Some("tif" | "tiff") => crate::geotiff::read(path),
+            _ => Err(DemError::UnknownFormat { file: path.display().to_string() }),
+        }
+    }
+
+    /// Parses the text of an ESRI ASCII grid; `file` names it in errors.
+    pub fn parse_ascii(text: &str, file: &str) -> Result<Self, DemError> {
+        crate::ascii::parse(text, file, text.len() as u64)
+    }
+
+    /// the file the raster came from.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    /// (columns, rows).
+    pub fn size(&self) -> [usize; 2] {
+        [self.cols, self.rows]
+    }
+
+    /// the cells' side (m).
+    pub fn cell(&self) -> f64 {
+        self.cell
+    }
+
+    /// (western, southern, eastern, northern) edges of the raster (m).
+    pub fn extent(&self) -> [f64; 4] {
+        let c = self.cell;
+        [self.west, self.north - self.rows as f64 * c, self.west + self.cols as f64 * c, self.north]
+    }
+
+    /// heights row by row from the north (holes included as stored).
+    pub fn heights(&self) -> &[f64] {
+        &self.z
+    }
+
+    /// the nodata value, if the raster declares one.
+    pub fn nodata(&self) -> Option<f64> {
+        self.nodata
+    }
+
+    /// the height stored for cell (row from the north, column from the west), `None` for a
+    /// hole.
+    pub fn at(&self, row: usize, col: usize) -> Option<f64> {
+        let v = *self.z.get(row * self.cols + col)?;
+        (v.is_finite() && Some(v) != self.nodata).then_some(v)
+    }
+
+    /// The ground height at map point (x, y): bilinear between the four nearest cell centres,
+    /// so planes and z = a + bx + cy + dxy are reproduced exactly. Within half a cell of the
+    /// raster's edge the height is the edge centres' (constant across that half cell). A point
+    /// outside the raster, or one that needs a hole, is refused.
+    pub fn height(&self, x: f64, y: f64) -> Result<f64, DemError> {
+        let [x_min, y_min, x_max, y_max] = self.extent();
+        let slack = 1e-9 * self.cell;
+        if !(x >= x_min - slack && x <= x_max + slack && y >= y_min - slack && y <= y_max + slack) {
+            return Err(DemError::Outside {
+                file: self.file.clone(),
+                x,
+                y,
+                x_min,
+                x_max,
+                y_min,
+                y_max,
+            });
+        }
+        // continuous (column, row) of the point among the cell centres
+        let u = ((x - self.west) / self.cell - 0.5).clamp(0.0, (self.cols - 1) as f64);
+        let v = ((self.north - y) / self.cell - 0.5).clamp(0.0, (self.rows - 1) as f64);
+        let (c0, fu) = split(u, self.cols);
+        let (r0, fv) = split(v, self.rows);
+        let mut h = 0.0;
+        for (dr, wr) in [(0, 1.0 - fv), (1, fv)] {
+            for (dc, wc) in [(0, 1.0 - fu), (1, fu)] {
+                let w = wr * wc;
+                if w == 0.0 {
+                    continue;
+                }
+                let (row, col) = (r0 + dr, c0 + dc);
+                let z = self.at(row, col).ok_or_else(|| DemError::Nodata {
+                    file: self.file.clone(),
+                    row,
+                    col,
+                    x,
+                    y,
+                })?;
+                h += w * z;
+            }
+        }
+        Ok(h)
+    }
+
+    /// The section along the straight line from map point `from` to `to`: stations at
+    /// 0, `spacing`, 2 `spacing`, … and at the line's end (the last interval may be shorter),
+    /// each with its bilinear height.
+    pub fn section(
+        &self,
+        from: [f64; 2],
+        to: [f64; 2],
+        spacing: f64,
+    ) -> Result<Vec<Station>, DemError> {
+        let line = |problem: String| DemError::Line { file: self.file.clone(), problem };
+        if !from.iter().chain(&to).all(|v| v.is_finite()) {
+            return Err(line(format!("the line {from:?} → {to:?} is not finite")));
+        }
+        if !(spacing.is_finite() && spacing > 0.0) {
+            return Err(line(format!("station spacing {spacing} is not a positive length")));
+        }
+        let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
+        let length = dx.hypot(dy);
+        if length == 0.0 {
+            return Err(line(format!("the line starts and ends at {from:?}")));
+        }
+        let intervals = (length / spacing * (1.0 - 1e-12)).ceil();
+        if intervals >= MAX_STATIONS as f64 {
+            return Err(line(format!(
+                "{length} m at {spacing} m spacing is more than {MAX_STATIONS} stations \
+                 (is the spacing in metres?)"
+            )));
+        }
+        let n = intervals as usize;
+        let mut out = Vec::with_capacity(n + 1);
+        for k in 0..=n {
+            let s = if k == n { length } else { k as f64 * spacing };
+            let t = s / length;
+            let (x, y) = (from[0] + t * dx, from[1] + t * dy);
+            out.push(Station { station: s, x, y, z: self.height(x, y)? });
+        }
+        Ok(out)
+    }
+}
+
+/// the lower centre index and the fraction towards the next along an axis of `n` centres.
+fn split(u: f64, n: usize) -> (usize, f64) {
+    if n == 1 {
+        return (0, 0.0);
+    }
+    let i = (u.floor() as usize).min(n - 2);
+    (i, u - i as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// z = 3 + 0.2 x − 0.1 y + 0.01 x y on 4 × 3 cells of 2 m, north-west corner (10, 20).
+    fn saddle() -> Raster {
+        let f = |x: f64, y: f64| 3.0 + 0.2 * x - 0.1 * y + 0.01 * x * y;
+        let (cols, rows, cell, west, north) = (4, 3, 2.0, 10.0, 20.0);
+        let mut z = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                z.push(f(west + (c as f64 + 0.5) * cell, north - (r as f64 + 0.5) * cell));
+            }
+        }
+        Raster::new("saddle", [cols, rows], cell, [west, north], z, None).unwrap()
+    }
+
+    #[test]
+    fn bilinear_heights_reproduce_a_bilinear_surface_between_centres() {
+        let r = saddle();
+        let f = |x: f64, y: f64| 3.0 + 0.2 * x - 0.1 * y + 0.01 * x * y;
+        for (x, y) in [(11.0, 19.0), (12.3, 16.7), (16.9, 15.1), (14.0, 17.0)] {
+            // rounding of a few products of O(10) numbers
+            assert!((r.height(x, y).unwrap() - f(x, y)).abs() < 1e-12, "({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn the_outer_half_cell_takes_the_edge_centres_height_and_beyond_is_refused() {
+        let r = saddle();
+        assert_eq!(r.height(10.0, 19.0).unwrap(), r.height(11.0, 19.0).unwrap());
+        assert!(matches!(r.height(9.9, 19.0), Err(DemError::Outside { .. })));
+        assert!(matches!(r.height(12.0, 13.9), Err(DemError::Outside { .. })));
+    }
+
+    #[test]
+    fn a_hole_is_refused_only_where_it_is_needed() {
+        let mut r = saddle();
+        r.z[4 + 2] = -9999.0; // row 1 (of 4 columns), column 2: centre (15, 17)
+        r.nodata = Some(-9999.0);
+        assert!(r.height(11.0, 19.0).is_ok());
+        let e = r.height(15.5, 17.5).unwrap_err();
+        assert!(matches!(e, DemError::Nodata { row: 1, col: 2, .. }), "{e}");
+    }
+
+    #[test]
+    fn a_section_has_stations_at_the_spacing_and_at_its_end() {
+        let r = saddle();
+        let s = r.section([10.5, 19.0], [17.5, 19.0], 2.0).unwrap();
+        let stations: Vec<f64> = s.iter().map(|p| p.station).collect();
+        assert_eq!(stations, vec![0.0, 2.0, 4.0, 6.0, 7.0]);
+        assert!(matches!(r.section([11.0, 19.0], [11.0, 19.0], 1.0), Err(DemError::Line { .. })));
+        assert!(matches!(r.section([11.0, 19.0], [12.0, 19.0], 0.0), Err(DemError::Line { .. })));
+        assert!(matches!(r.section([11.0, 19.0], [12.0, 19.0], 1e-9), Err(DemError::Line { .. })));
+    }
+}
