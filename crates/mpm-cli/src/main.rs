@@ -106,6 +106,27 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Cut the section of a DEM (ESRI ASCII `.asc` or GeoTIFF `.tif`) along a line: CSV
+    /// `station,x,y,z`, station = distance from FROM (a scene's `csv` profile reads it back).
+    Section {
+        /// the elevation raster.
+        dem: PathBuf,
+        /// start of the line, map coordinates `X,Y` (m).
+        #[arg(long, value_parser = map_point, allow_hyphen_values = true)]
+        from: [f64; 2],
+        /// end of the line, `X,Y` (m).
+        #[arg(long, value_parser = map_point, allow_hyphen_values = true)]
+        to: [f64; 2],
+        /// station spacing (m) [default: the raster's cell size].
+        #[arg(long)]
+        spacing: Option<f64>,
+        /// write the CSV here instead of to standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// overwrite an existing --out file.
+        #[arg(long)]
+        force: bool,
+    },
     /// Continue a run from the last checkpoint in its output directory.
     Resume {
         /// the run's output directory.
@@ -168,6 +189,9 @@ fn main() -> ExitCode {
                 interrupt: Some(signals.interrupt.clone()),
             };
             finish(mpm_cli::resume(&dir, &opts), &dir, quiet, &signals)
+        }
+        Command::Section { dem, from, to, spacing, out, force } => {
+            section(&dem, from, to, spacing, out.as_deref(), force)
         }
         Command::Check { scene } => {
             let scene = match load(&scene) {
@@ -300,6 +324,62 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `X,Y` as two finite numbers.
+fn map_point(s: &str) -> Result<[f64; 2], String> {
+    let v: Vec<f64> =
+        s.split(',').map(|t| t.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| {
+            format!("`{s}`: {e}; give the map point as X,Y (e.g. 500120.5,4100200)")
+        })?;
+    match v[..] {
+        [x, y] if x.is_finite() && y.is_finite() => Ok([x, y]),
+        _ => Err(format!("`{s}`: give the map point as two finite numbers X,Y")),
+    }
+}
+
+/// `mpm section`: the DEM's section along a line, as CSV to `out` or standard output.
+fn section(
+    dem: &Path,
+    from: [f64; 2],
+    to: [f64; 2],
+    spacing: Option<f64>,
+    out: Option<&Path>,
+    force: bool,
+) -> ExitCode {
+    let stations =
+        mpm_dem::Raster::read(dem).and_then(|r| r.section(from, to, spacing.unwrap_or(r.cell())));
+    let stations = match stations {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut csv = mpm_output::csv::SECTION_HEADER.to_string();
+    mpm_output::csv::section(&mut csv, &stations);
+    let Some(out) = out else {
+        print!("{csv}");
+        return ExitCode::SUCCESS;
+    };
+    if out.exists() && !force {
+        eprintln!("error: {} exists; pass --force to overwrite it", out.display());
+        return ExitCode::from(2);
+    }
+    if let Err(e) = mpm_output::atomic::write(out, csv.as_bytes()) {
+        eprintln!("error: {e}");
+        return ExitCode::from(1);
+    }
+    let (lo, hi) = stations
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.z), b.max(p.z)));
+    let last = stations.last().map_or(0.0, |p| p.station);
+    println!(
+        "wrote {}: {} stations over {last:.3} m, z from {lo:.3} to {hi:.3} m",
+        out.display(),
+        stations.len()
+    );
+    ExitCode::SUCCESS
 }
 
 /// A scene file path, or an embedded scene's name when no such file exists.

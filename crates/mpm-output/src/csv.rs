@@ -150,6 +150,17 @@ pub fn runout(s: &mut String, rows: &[RunoutMetrics]) {
     }
 }
 
+/// header line of a DEM section (`mpm section`); a scene reads `station` and `z` back as a
+/// polyline.
+pub const SECTION_HEADER: &str = "station,x,y,z\n";
+
+/// appends the stations of a DEM section to `s`.
+pub fn section(s: &mut String, stations: &[mpm_dem::Station]) {
+    for p in stations {
+        let _ = writeln!(s, "{},{},{},{}", p.station, p.x, p.y, p.z);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

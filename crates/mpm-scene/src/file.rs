@@ -75,9 +75,15 @@ pub struct GridSpec {
     /// terrain: cell rows above the ground.
     #[serde(default)]
     pub rows: Option<i64>,
-    /// terrain: ground polyline `[[x, y], ...]`, x strictly increasing (m).
-    #[serde(default, deserialize_with = "exact::pairs")]
-    pub profile: Option<Vec<[f64; 2]>>,
+    /// terrain: ground polyline `[[x, y], ...]`, x strictly increasing (m), or the section of
+    /// a DEM (`{ dem = "slope.asc", from = [x, y], to = [x, y] }`) or a CSV of points.
+    #[serde(default)]
+    pub profile: Option<PolylineSpec>,
+    /// terrain: a rupture surface cut into the profile: the grid's ground is the lower of the
+    /// two where this polyline is defined, so that a release mass between the pre-failure
+    /// surface and the rupture surface (a `between_profiles` body) rests on the ground.
+    #[serde(default)]
+    pub rupture_surface: Option<PolylineSpec>,
     /// terrain: `"snap"` (default) or `"reject"`.
     #[serde(default)]
     pub kink_policy: Option<KinkPolicySpec>,
@@ -130,6 +136,8 @@ pub enum ShapeKind {
     Polygon,
     /// rectangle resting on the ground (or any inclined base).
     OnSlope,
+    /// a release mass between a `top` and a `bottom` polyline.
+    BetweenProfiles,
 }
 
 /// `[[bodies]]`.
@@ -141,7 +149,7 @@ pub struct BodySpec {
     pub name: Option<String>,
     /// name of a `[materials.NAME]` table.
     pub material: String,
-    /// `"rectangle"`, `"polygon"` or `"on_slope"`.
+    /// `"rectangle"`, `"polygon"`, `"on_slope"` or `"between_profiles"`.
     pub shape: ShapeKind,
     /// rectangle: lower-left corner (m).
     #[serde(default, deserialize_with = "exact::pair")]
@@ -168,6 +176,12 @@ pub struct BodySpec {
     /// on_slope: thickness normal to the base (m).
     #[serde(default)]
     pub thickness: Option<f64>,
+    /// between_profiles: the upper surface (e.g. the pre-failure ground), x increasing.
+    #[serde(default)]
+    pub top: Option<PolylineSpec>,
+    /// between_profiles: the lower surface (e.g. the rupture surface), x increasing.
+    #[serde(default)]
+    pub bottom: Option<PolylineSpec>,
     /// particles per cell along each axis (n × n per cell), default 2.
     #[serde(default)]
     pub particles_per_cell: Option<i64>,
@@ -587,6 +601,86 @@ pub struct OutputSpec {
 
 /// 2-vectors that are exactly two values: serde's arrays read the first two elements of a longer
 /// TOML array and ignore the rest (`cell = [0.25, 0.25, 0.25]` was accepted).
+/// A polyline `[[x, y], ...]` (m), written inline or read from a file ([`PolylineFile`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum PolylineSpec {
+    /// the points, in order.
+    Points(Vec<[f64; 2]>),
+    /// a DEM section or a CSV of points.
+    File(PolylineFile),
+}
+
+impl PolylineSpec {
+    /// the inline points, if the polyline is written inline.
+    pub fn points(&self) -> Option<&[[f64; 2]]> {
+        match self {
+            PolylineSpec::Points(p) => Some(p),
+            PolylineSpec::File(_) => None,
+        }
+    }
+}
+
+impl From<Vec<[f64; 2]>> for PolylineSpec {
+    fn from(p: Vec<[f64; 2]>) -> Self {
+        PolylineSpec::Points(p)
+    }
+}
+
+impl<'de> Deserialize<'de> for PolylineSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = PolylineSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a list of [x, y] points, or a table `{ dem = \"FILE\", from = [x, y], \
+                     to = [x, y] }` or `{ csv = \"FILE\" }`",
+                )
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<Self::Value, A::Error> {
+                let v = Vec::<exact::Two<f64>>::deserialize(SeqAccessDeserializer::new(seq))?;
+                Ok(PolylineSpec::Points(v.into_iter().map(|t| t.0).collect()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                PolylineFile::deserialize(MapAccessDeserializer::new(map)).map(PolylineSpec::File)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A polyline read from a file, relative to the scene file's directory: either the section of a
+/// DEM (`dem`, `from`, `to`, optional `spacing`; x is the distance along the line from `from`,
+/// y the ground height) or a CSV of points (`csv`: columns `station` and `z` if its header has
+/// them, as `mpm section` writes, else its first two columns as x and y).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolylineFile {
+    /// an ESRI ASCII grid (`.asc`) or GeoTIFF (`.tif`) of ground heights.
+    #[serde(default)]
+    pub dem: Option<String>,
+    /// a CSV file of points.
+    #[serde(default)]
+    pub csv: Option<String>,
+    /// dem: the section's start, map coordinates (m).
+    #[serde(default, deserialize_with = "exact::pair")]
+    pub from: Option<[f64; 2]>,
+    /// dem: the section's end, map coordinates (m).
+    #[serde(default, deserialize_with = "exact::pair")]
+    pub to: Option<[f64; 2]>,
+    /// dem: station spacing (m); default the grid's column width.
+    #[serde(default)]
+    pub spacing: Option<f64>,
+}
+
 mod exact {
     use serde::de::Error;
     use serde::{Deserialize, Deserializer};

@@ -49,7 +49,7 @@ pub use scene::{
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
-pub use validate::load_scene_str;
+pub use validate::{load_scene_str, load_scene_str_in};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
 /// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
@@ -95,5 +95,6 @@ pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
             "pass the scene's .toml file (`mpm scenes --write flume` writes an example)",
         )
     })?;
-    load_scene_str(&text, &origin)
+    let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    load_scene_str_in(&text, &origin, dir)
 }

@@ -15,6 +15,8 @@ pub struct Scene {
     pub(crate) text: String,
     pub(crate) file: SceneFile,
     pub(crate) r: Resolved,
+    /// the directory the scene's named files are relative to.
+    pub(crate) dir: Option<std::path::PathBuf>,
 }
 
 /// The background grid, built.

@@ -79,3 +79,88 @@ fn element_test_writes_csv_and_plot_with_the_papers_numbers() {
     assert!(dir.join("simple_shear_volume.png").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A plane DEM: `mpm section` cuts it, a scene takes the same section as its terrain, cuts a
+/// rupture surface into it and fills the mass between the two (its top read back from the CSV
+/// that `mpm section` wrote).
+#[test]
+fn a_dem_section_becomes_a_scene_with_a_release_mass_between_two_surfaces() {
+    let dir = temp_dir("dem");
+    std::fs::create_dir_all(&dir).unwrap();
+    // z = 50 − 0.5 x, 60 × 10 cells of 1 m, north-west corner (0, 10): centres at x = 0.5, …
+    let mut asc = String::from("ncols 60\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 1\n");
+    for _ in 0..10 {
+        let row: Vec<String> =
+            (0..60).map(|c| format!("{}", 50.0 - 0.5 * (c as f64 + 0.5))).collect();
+        asc.push_str(&row.join(" "));
+        asc.push('\n');
+    }
+    std::fs::write(dir.join("plane.asc"), asc).unwrap();
+    let csv = dir.join("top.csv");
+    let (code, out, err) = mpm(&[
+        "section",
+        dir.join("plane.asc").to_str().unwrap(),
+        "--from",
+        "0.5,5",
+        "--to",
+        "59.5,5",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("60 stations over 59.000 m"), "{out}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("station,x,y,z\n0,0.5,5,49.75\n"), "{text}");
+    // the same section, the rupture surface 2 m deep at its middle (station 15)
+    let scene = r#"
+title = "plane DEM"
+[grid]
+kind = "terrain"
+cell_width = 1.0
+row_height = 1.0
+rows = 10
+profile = { dem = "plane.asc", from = [0.5, 5.0], to = [59.5, 5.0] }
+rupture_surface = [[10.0, 44.75], [15.0, 40.25], [20.0, 39.75]]
+[materials.sand]
+kind = "elastic"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+[[bodies]]
+material = "sand"
+shape = "between_profiles"
+top = { csv = "top.csv" }
+bottom = [[10.0, 44.75], [15.0, 40.25], [20.0, 39.75]]
+[solver]
+end_time = 0.01
+"#;
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let (code, out, err) = mpm(&["check", dir.join("scene.toml").to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    // the mass: the triangle between the plane and the rupture surface, 10 m × 2 m / 2 = 10 m²,
+    // at 0.25 m² a particle (2 × 2 per 1 m cell); the lattice gains or loses at most a
+    // half-spacing band along the 22.6 m perimeter.
+    let n: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("particles:"))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap();
+    assert!((n * 0.25 - 10.0).abs() <= 22.6 * 0.25, "{n} particles: {out}");
+
+    // without the rupture surface cut into the ground the mass is below it: refused, with the fix
+    std::fs::write(
+        dir.join("scene.toml"),
+        scene.replace("rupture_surface = [[10.0, 44.75], [15.0, 40.25], [20.0, 39.75]]\n", ""),
+    )
+    .unwrap();
+    let (code, _, err) = mpm(&["check", dir.join("scene.toml").to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("below the ground") && err.contains("rupture_surface"), "{err}");
+
+    // a line leaving the raster names the file and the extent
+    std::fs::write(dir.join("scene.toml"), scene.replace("59.5, 5.0]", "70.0, 5.0]")).unwrap();
+    let (code, _, err) = mpm(&["check", dir.join("scene.toml").to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("plane.asc") && err.contains("outside the raster"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

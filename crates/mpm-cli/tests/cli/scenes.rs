@@ -27,7 +27,7 @@ fn flume_has_the_papers_table_2() {
     assert_eq!(f.grid.cell_width, Some(0.1));
     assert_eq!(f.grid.row_height, Some(0.1));
     // slope 30°
-    let p = f.grid.profile.as_ref().unwrap();
+    let p = f.grid.profile.as_ref().and_then(|p| p.points()).unwrap();
     let slope = ((p[0][1] - p[1][1]) / (p[1][0] - p[0][0])).atan().to_degrees();
     assert!((slope - 30.0).abs() < 1e-9);
     assert_eq!(f.boundaries.ground, Some(mpm_cli::scene::BoundarySpec::FrictionAngleDeg(27.0)));

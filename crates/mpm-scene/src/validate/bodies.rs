@@ -97,7 +97,18 @@ pub(super) fn seeds(
                 "use a coarser grid, fewer particles per cell or a smaller body",
             ));
         }
-        let fill = generate::fill(&shape, spacing);
+        let mut fill = generate::fill(&shape, spacing);
+        if let (Shape::BetweenProfiles { .. }, GridBuilt::Terrain(t)) = (&shape, grid) {
+            // Between two columns the ground is a chord of the rupture surface cut into it
+            // (`grid.rupture_surface`); the sliver between that chord and a curved surface holds
+            // points just below the ground: they are left out. A mass deeper below the ground
+            // is misplaced and reported as such below.
+            let sliver = 0.5 * t.row_height();
+            fill.retain(|s| {
+                t.ground_height(s.position.x)
+                    .is_none_or(|g| s.position.y > g || s.position.y < g - sliver)
+            });
+        }
         if fill.is_empty() {
             return Err(ctx.err(
                 &base,
@@ -201,6 +212,7 @@ fn body_shape(
         ShapeKind::Rectangle => &["min", "max"],
         ShapeKind::Polygon => &["vertices"],
         ShapeKind::OnSlope => &["base_start", "base_x", "angle_deg", "length", "thickness"],
+        ShapeKind::BetweenProfiles => &["top", "bottom"],
     };
     for (field, present) in [
         ("min", body.min.is_some()),
@@ -211,6 +223,8 @@ fn body_shape(
         ("angle_deg", body.angle_deg.is_some()),
         ("length", body.length.is_some()),
         ("thickness", body.thickness.is_some()),
+        ("top", body.top.is_some()),
+        ("bottom", body.bottom.is_some()),
     ] {
         if present && !allowed.contains(&field) {
             return Err(ctx.foreign(
@@ -223,7 +237,90 @@ fn body_shape(
         ShapeKind::Rectangle => rectangle(ctx, base, body),
         ShapeKind::Polygon => polygon(ctx, base, body),
         ShapeKind::OnSlope => on_slope(ctx, base, body, grid),
+        ShapeKind::BetweenProfiles => between_profiles(ctx, base, body, grid),
     }
+}
+
+/// `shape = "between_profiles"`: the mass between a `top` and a `bottom` polyline (inline, a
+/// CSV or a DEM section), each with x strictly increasing; particles only where top > bottom.
+fn between_profiles(
+    ctx: &Ctx<'_>,
+    base: &str,
+    body: &BodySpec,
+    grid: &GridBuilt,
+) -> Result<Shape, SceneError> {
+    let spacing = match grid {
+        GridBuilt::Terrain(t) => t.cell_width(),
+        GridBuilt::Regular(r) => r.cell_size().x,
+    };
+    let mut lines = [Vec::new(), Vec::new()];
+    for (k, (name, spec)) in [("top", &body.top), ("bottom", &body.bottom)].into_iter().enumerate()
+    {
+        let path = format!("{base}.{name}");
+        let spec = spec
+            .as_ref()
+            .ok_or_else(|| ctx.missing(&path, "between_profiles", "[[0.0, 2.0], [10.0, 1.0]]"))?;
+        let points = super::polyline::points(ctx, &path, spec, spacing)?;
+        super::polyline::check_increasing(ctx, &path, &points)?;
+        if points.len() > MAX_VERTICES {
+            return Err(ctx.err(
+                &path,
+                Some(format!("{} point(s)", points.len())),
+                format!("a profile may have at most {MAX_VERTICES} points"),
+                "2 or more [x, y] points with x increasing",
+                "give the surface as [[x0, y0], [x1, y1], ...]",
+            ));
+        }
+        lines[k] = points.iter().map(|p| Vector::new(p[0], p[1])).collect();
+    }
+    let [top, bottom] = lines;
+    let shape = Shape::BetweenProfiles { top, bottom };
+    if enclosed_area(&shape) <= 0.0 {
+        return Err(ctx.err(
+            &format!("{base}.top"),
+            None,
+            "the top profile is nowhere above the bottom one over their common x range",
+            "a top surface above the bottom surface somewhere",
+            "check that `top` is the upper surface and that the two overlap in x",
+        ));
+    }
+    Ok(shape)
+}
+
+/// ∫ max(0, top − bottom) dx over the common x range of two polylines (x increasing): exact for
+/// the piecewise-linear difference, sign changes included.
+fn area_between(top: &[Vector], bottom: &[Vector]) -> f64 {
+    use mpm_solver::generate::polyline_height;
+    let (Some(t0), Some(b0), Some(t1), Some(b1)) =
+        (top.first(), bottom.first(), top.last(), bottom.last())
+    else {
+        return 0.0;
+    };
+    let (x0, x1) = (t0.x.max(b0.x), t1.x.min(b1.x));
+    if x1 <= x0 || x1.is_nan() || x0.is_nan() {
+        return 0.0;
+    }
+    let mut xs: Vec<f64> =
+        top.iter().chain(bottom).map(|p| p.x).filter(|&x| x > x0 && x < x1).collect();
+    xs.extend([x0, x1]);
+    xs.sort_by(f64::total_cmp);
+    let d =
+        |x: f64| polyline_height(top, x).unwrap_or(0.0) - polyline_height(bottom, x).unwrap_or(0.0);
+    let mut area = 0.0;
+    for w in xs.windows(2) {
+        let (xa, xb) = (w[0], w[1]);
+        let (da, db) = (d(xa), d(xb));
+        area += if da >= 0.0 && db >= 0.0 {
+            0.5 * (da + db) * (xb - xa)
+        } else if da > 0.0 || db > 0.0 {
+            // one sign change: the positive triangle
+            let pos = da.max(db);
+            0.5 * pos * pos / (da - db).abs() * (xb - xa)
+        } else {
+            0.0
+        };
+    }
+    area
 }
 
 /// both coordinates finite.
@@ -393,6 +490,7 @@ fn shape_name(k: ShapeKind) -> &'static str {
         ShapeKind::Rectangle => "rectangle",
         ShapeKind::Polygon => "polygon",
         ShapeKind::OnSlope => "on_slope",
+        ShapeKind::BetweenProfiles => "between_profiles",
     }
 }
 
@@ -510,6 +608,7 @@ fn shape_box(shape: &Shape) -> [Vector; 2] {
     let corners: Vec<Vector> = match shape {
         Shape::Rectangle { min, max } => vec![*min, *max],
         Shape::Polygon { vertices } => vertices.clone(),
+        Shape::BetweenProfiles { top, bottom } => top.iter().chain(bottom).copied().collect(),
         Shape::OnSlope { base_start, angle_rad, length, thickness } => {
             let d = Vector::new(angle_rad.cos(), angle_rad.sin());
             let n = Vector::new(-d.y, d.x);
@@ -531,7 +630,7 @@ fn shape_area(shape: &Shape) -> f64 {
     match shape {
         Shape::Rectangle { min, max } => (max.x - min.x) * (max.y - min.y),
         Shape::OnSlope { length, thickness, .. } => length * thickness,
-        Shape::Polygon { .. } => {
+        Shape::Polygon { .. } | Shape::BetweenProfiles { .. } => {
             let [lo, hi] = shape_box(shape);
             (hi.x - lo.x) * (hi.y - lo.y)
         }
@@ -545,6 +644,7 @@ fn enclosed_area(shape: &Shape) -> f64 {
             let n = vertices.len();
             0.5 * (0..n).map(|k| vertices[k].perp_dot(vertices[(k + 1) % n])).sum::<f64>().abs()
         }
+        Shape::BetweenProfiles { top, bottom } => area_between(top, bottom),
         other => shape_area(other),
     }
 }
@@ -564,6 +664,9 @@ fn contains(shape: &Shape, p: Vector) -> bool {
             s > EPS && s < length - EPS && h > EPS && h < thickness - EPS
         }
         Shape::Polygon { vertices } => mpm_solver::generate::inside_polygon(vertices, p),
+        Shape::BetweenProfiles { top, bottom } => {
+            mpm_solver::generate::between_profiles(top, bottom, p)
+        }
     }
 }
 
@@ -598,6 +701,7 @@ fn outside_error(
     let field = match body.shape {
         ShapeKind::Rectangle => "min",
         ShapeKind::Polygon => "vertices",
+        ShapeKind::BetweenProfiles => "bottom",
         ShapeKind::OnSlope => {
             if body.base_x.is_some() {
                 "base_x"
@@ -626,6 +730,11 @@ fn outside_error(
         None,
         problem,
         format!("every particle inside the grid: {extent}"),
-        "move or shrink the body, or enlarge the grid (more rows, a longer profile or more cells)",
+        if body.shape == ShapeKind::BetweenProfiles {
+            "a release mass sits on the rupture surface: cut it into the ground with `[grid] \
+             rupture_surface` (the body's `bottom`), and give the grid enough rows above it"
+        } else {
+            "move or shrink the body, or enlarge the grid (more rows, a longer profile or more cells)"
+        },
     )
 }

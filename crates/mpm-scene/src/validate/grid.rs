@@ -36,9 +36,20 @@ pub(super) fn build(
                 .row_height
                 .ok_or_else(|| ctx.missing("grid.row_height", "terrain grid", "0.1"))?;
             let rows = g.rows.ok_or_else(|| ctx.missing("grid.rows", "terrain grid", "15"))?;
-            let profile = g.profile.clone().ok_or_else(|| {
+            let profile = g.profile.as_ref().ok_or_else(|| {
                 ctx.missing("grid.profile", "terrain grid", "[[0.0, 1.0], [5.0, 0.0]]")
             })?;
+            let profile = super::polyline::points(ctx, "grid.profile", profile, cell_width)?;
+            let profile = match &g.rupture_surface {
+                None => profile,
+                Some(r) => {
+                    let path = "grid.rupture_surface";
+                    let rupture = super::polyline::points(ctx, path, r, cell_width)?;
+                    super::polyline::check_increasing(ctx, path, &rupture)?;
+                    super::polyline::check_increasing(ctx, "grid.profile", &profile)?;
+                    super::polyline::cut(&profile, &rupture, cell_width)
+                }
+            };
             if !(1..=1_000_000).contains(&rows) {
                 return Err(ctx.err(
                     "grid.rows",
@@ -68,6 +79,7 @@ pub(super) fn build(
                 ("row_height", g.row_height.is_some()),
                 ("rows", g.rows.is_some()),
                 ("profile", g.profile.is_some()),
+                ("rupture_surface", g.rupture_surface.is_some()),
                 ("kink_policy", g.kink_policy.is_some()),
             ] {
                 if present {

@@ -15,6 +15,7 @@ mod boundaries;
 mod grid;
 mod materials;
 mod output;
+mod polyline;
 mod solver;
 
 use crate::error::SceneError;
@@ -39,6 +40,8 @@ fn pair(p: [f64; 2]) -> String {
 struct Ctx<'a> {
     origin: &'a str,
     map: &'a SourceMap,
+    /// the directory that files named in the scene are relative to (the scene file's).
+    dir: Option<&'a std::path::Path>,
 }
 
 impl Ctx<'_> {
@@ -107,13 +110,34 @@ impl Ctx<'_> {
 }
 
 /// Parses and validates a scene; `origin` names the text in messages (a path, or
-/// `embedded:NAME`).
+/// `embedded:NAME`). Files the scene names (DEMs, CSV polylines) are relative to the current
+/// directory; [`load_scene_str_in`] gives them another.
 pub fn load_scene_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+    load(text, origin, None)
+}
+
+/// [`load_scene_str`] for a scene whose named files are relative to `dir` (the directory of the
+/// scene file).
+pub fn load_scene_str_in(
+    text: &str,
+    origin: &str,
+    dir: &std::path::Path,
+) -> Result<Scene, SceneError> {
+    load(text, origin, Some(dir))
+}
+
+fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene, SceneError> {
     let map = SourceMap::new(text);
-    let ctx = Ctx { origin, map: &map };
+    let ctx = Ctx { origin, map: &map, dir };
     let file: SceneFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
     let r = resolve(&ctx, &file)?;
-    Ok(Scene { origin: origin.to_string(), text: text.to_string(), file, r })
+    Ok(Scene {
+        origin: origin.to_string(),
+        text: text.to_string(),
+        file,
+        r,
+        dir: dir.map(std::path::Path::to_path_buf),
+    })
 }
 
 impl Scene {
@@ -132,7 +156,7 @@ impl Scene {
             admissible: String::new(),
             fix: "use finite values".into(),
         })?;
-        load_scene_str(&text, &format!("{} (modified)", self.origin))
+        load(&text, &format!("{} (modified)", self.origin), self.dir.as_deref())
     }
 }
 

@@ -1,0 +1,236 @@
+//! Polylines a scene gives inline or by file: the section of a DEM along a line (`mpm-dem`) or
+//! a CSV of points. Paths are relative to the scene file's directory.
+
+use std::path::PathBuf;
+
+use mpm_dem::{DemError, Raster};
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::file::{PolylineFile, PolylineSpec};
+
+/// Most points a CSV polyline may have (the scene's own outlines are bounded likewise).
+const MAX_CSV_POINTS: usize = 1_000_000;
+/// Largest CSV polyline file read (bytes).
+const MAX_CSV_BYTES: u64 = 64 << 20;
+
+/// The points of the polyline at `path` (a field path such as `grid.profile`): inline as
+/// written, or read from its file. `spacing` is the DEM station spacing when the scene gives
+/// none (the grid's column width).
+pub(super) fn points(
+    ctx: &Ctx<'_>,
+    path: &str,
+    spec: &PolylineSpec,
+    spacing: f64,
+) -> Result<Vec<[f64; 2]>, SceneError> {
+    match spec {
+        PolylineSpec::Points(p) => Ok(p.clone()),
+        PolylineSpec::File(f) => from_file(ctx, path, f, spacing),
+    }
+}
+
+/// Refuses a polyline at `path` with fewer than two points, a non-finite point or x not
+/// strictly increasing.
+pub(super) fn check_increasing(
+    ctx: &Ctx<'_>,
+    path: &str,
+    points: &[[f64; 2]],
+) -> Result<(), SceneError> {
+    if points.len() < 2 {
+        return Err(ctx.err(
+            path,
+            Some(format!("{} point(s)", points.len())),
+            "a profile needs at least two points",
+            "2 or more [x, y] points with x increasing",
+            "give the surface as [[x0, y0], [x1, y1], ...]",
+        ));
+    }
+    for (i, w) in points.windows(2).enumerate() {
+        let finite = w.iter().flatten().all(|v| v.is_finite());
+        if !(finite && w[1][0] > w[0][0]) {
+            return Err(ctx.err(
+                &format!("{path}[{}]", i + 1),
+                Some(format!("[{}, {}]", w[1][0], w[1][1])),
+                format!("x must increase along the profile (after [{}, {}])", w[0][0], w[0][1]),
+                "finite points with x strictly increasing",
+                "list the surface's points from left to right",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The ground `profile` with the `rupture` surface cut into it: the lower of the two at the
+/// profile's points and at every column boundary (`x0 + k·cell`) where the rupture surface is
+/// defined, so that the ground's kinks stay on column boundaries.
+pub(super) fn cut(profile: &[[f64; 2]], rupture: &[[f64; 2]], cell: f64) -> Vec<[f64; 2]> {
+    use mpm_solver::Vector;
+    use mpm_solver::generate::polyline_height;
+    let line =
+        |p: &[[f64; 2]]| -> Vec<Vector> { p.iter().map(|q| Vector::new(q[0], q[1])).collect() };
+    let (ground, surface) = (line(profile), line(rupture));
+    let (x0, x_end) = (profile[0][0], profile[profile.len() - 1][0]);
+    let (r0, r1) = (rupture[0][0].max(x0), rupture[rupture.len() - 1][0].min(x_end));
+    let mut xs: Vec<f64> = profile.iter().map(|p| p[0]).collect();
+    if r1 > r0 {
+        let (k0, k1) = (((r0 - x0) / cell).ceil() as i64, ((r1 - x0) / cell).floor() as i64);
+        xs.extend((k0..=k1).map(|k| x0 + k as f64 * cell));
+    }
+    xs.sort_by(f64::total_cmp);
+    xs.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * cell);
+    xs.into_iter()
+        .filter_map(|x| {
+            let g = polyline_height(&ground, x)?;
+            Some([x, polyline_height(&surface, x).map_or(g, |r| r.min(g))])
+        })
+        .collect()
+}
+
+/// `file` relative to the scene's directory.
+pub(super) fn file_path(ctx: &Ctx<'_>, file: &str) -> PathBuf {
+    let p = PathBuf::from(file);
+    match ctx.dir {
+        Some(dir) if p.is_relative() => dir.join(p),
+        _ => p,
+    }
+}
+
+fn from_file(
+    ctx: &Ctx<'_>,
+    path: &str,
+    f: &PolylineFile,
+    default_spacing: f64,
+) -> Result<Vec<[f64; 2]>, SceneError> {
+    let field = |name: &str| format!("{path}.{name}");
+    match (&f.dem, &f.csv) {
+        (Some(_), Some(_)) => Err(ctx.err(
+            &field("csv"),
+            None,
+            "a polyline comes from one file: a DEM section or a CSV, not both",
+            "`dem` with `from` and `to`, or `csv`",
+            "remove `dem` or `csv`",
+        )),
+        (None, None) => Err(ctx.err(
+            path,
+            None,
+            "a polyline table names its file",
+            "`{ dem = \"slope.asc\", from = [x, y], to = [x, y] }` or `{ csv = \"points.csv\" }`",
+            "add `dem = ...` or `csv = ...`, or give the points inline as [[x, y], ...]",
+        )),
+        (Some(dem), None) => {
+            let from =
+                f.from.ok_or_else(|| ctx.missing(&field("from"), "a DEM section", "[x, y]"))?;
+            let to = f.to.ok_or_else(|| ctx.missing(&field("to"), "a DEM section", "[x, y]"))?;
+            let spacing = f.spacing.unwrap_or(default_spacing);
+            if !(spacing.is_finite() && spacing > 0.0) {
+                return Err(ctx.range(
+                    &field("spacing"),
+                    spacing,
+                    "> 0 (m)",
+                    "give the station spacing in metres, or leave it out (the column width)",
+                ));
+            }
+            let raster =
+                Raster::read(&file_path(ctx, dem)).map_err(|e| dem_error(ctx, &field("dem"), e))?;
+            let s =
+                raster.section(from, to, spacing).map_err(|e| dem_error(ctx, &field("dem"), e))?;
+            Ok(s.iter().map(|p| [p.station, p.z]).collect())
+        }
+        (None, Some(csv)) => {
+            for (name, present) in [
+                ("from", f.from.is_some()),
+                ("to", f.to.is_some()),
+                ("spacing", f.spacing.is_some()),
+            ] {
+                if present {
+                    return Err(ctx.foreign(&field(name), "a CSV polyline holds its points"));
+                }
+            }
+            read_csv(ctx, &field("csv"), &file_path(ctx, csv))
+        }
+    }
+}
+
+/// A raster error at `field`, with the fix its kind calls for.
+fn dem_error(ctx: &Ctx<'_>, field: &str, e: DemError) -> SceneError {
+    let fix = match &e {
+        DemError::Io { .. } => "check the path (relative to the scene file's directory)",
+        DemError::UnknownFormat { .. } => "give an ESRI ASCII grid (.asc) or a GeoTIFF (.tif)",
+        DemError::Nodata { .. } => "move the line off the hole, or fill the raster's holes",
+        DemError::Outside { .. } => {
+            "keep `from` and `to` inside the raster (`mpm section` shows it)"
+        }
+        DemError::NonSquareCells { .. } => "reproject the DEM to square metric cells (e.g. UTM)",
+        DemError::Line { .. } => "give two different map points and a positive spacing",
+        _ => "check the raster (GDAL's `gdalinfo` describes it)",
+    };
+    ctx.err(field, None, e.to_string(), "", fix)
+}
+
+/// Reads a CSV polyline: columns `station` and `z` if the header names them (what `mpm section`
+/// writes), else the first two columns as x and y. An optional header line; `#` comments.
+fn read_csv(
+    ctx: &Ctx<'_>,
+    field: &str,
+    file: &std::path::Path,
+) -> Result<Vec<[f64; 2]>, SceneError> {
+    use std::io::Read;
+    let name = file.display().to_string();
+    let fail = |problem: String, fix: &str| ctx.err(field, None, problem, "", fix);
+    let mut text = String::new();
+    std::fs::File::open(file)
+        .and_then(|f| f.take(MAX_CSV_BYTES + 1).read_to_string(&mut text))
+        .map_err(|e| {
+            fail(
+                format!("{name}: cannot read: {e}"),
+                "check the path (relative to the scene file's directory)",
+            )
+        })?;
+    if text.len() as u64 > MAX_CSV_BYTES {
+        return Err(fail(
+            format!("{name}: larger than {} MiB", MAX_CSV_BYTES >> 20),
+            "give fewer points",
+        ));
+    }
+    let mut columns = (0usize, 1usize);
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split([',', ';', '\t']).map(str::trim).collect();
+        if out.is_empty() && cells.iter().any(|c| c.parse::<f64>().is_err()) {
+            // a header
+            let at = |n: &str| cells.iter().position(|c| c.eq_ignore_ascii_case(n));
+            if let (Some(s), Some(z)) = (at("station"), at("z")) {
+                columns = (s, z);
+            }
+            continue;
+        }
+        let get = |i: usize| -> Result<f64, SceneError> {
+            cells.get(i).and_then(|c| c.parse::<f64>().ok()).filter(|v| v.is_finite()).ok_or_else(
+                || {
+                    fail(
+                        format!("{name}, line {}: column {} is not a finite number", k + 1, i + 1),
+                        "every data line holds numbers (x, y), or station and z under a header",
+                    )
+                },
+            )
+        };
+        if out.len() == MAX_CSV_POINTS {
+            return Err(fail(
+                format!("{name}: more than {MAX_CSV_POINTS} points"),
+                "give fewer points",
+            ));
+        }
+        out.push([get(columns.0)?, get(columns.1)?]);
+    }
+    if out.len() < 2 {
+        return Err(fail(
+            format!("{name}: {} point(s); a polyline needs at least two", out.len()),
+            "give the points as lines `x, y`",
+        ));
+    }
+    Ok(out)
+}
