@@ -15,8 +15,9 @@ use std::time::Instant;
 
 use mpm_grid::ShapeFunctions;
 use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
+use mpm_scene::envelope::{self, Envelope};
 use mpm_scene::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
-use mpm_scene::{GridBuilt, Scene, SceneError, ground_height, load_scene_str};
+use mpm_scene::{GridBuilt, Resolved, Scene, SceneError, ground_height, load_scene_str};
 use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
@@ -289,6 +290,12 @@ impl Job for RunJob<'_> {
             stop: None,
         };
         if fresh {
+            if r.output.envelope {
+                let column = column_width(r);
+                let mut e = Envelope::new(&r.ground, column);
+                observe(&mut e, r, &solver);
+                driver.history.envelope = Some(e);
+            }
             let m0 = driver.metrics(&solver);
             driver.history.initial = Some(m0);
             let p = solver.particles();
@@ -360,6 +367,7 @@ impl Job for RunJob<'_> {
         driver.flush_series()?;
         let summary = driver.summary(&solver, status, error, self.threads);
         if let Some(dir) = driver.dir {
+            driver.envelope_files(&solver)?;
             driver.plots(&solver)?;
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
@@ -399,6 +407,30 @@ struct Driver<'a> {
     stop: Option<Stop>,
 }
 
+/// the grid's column width: the stations of the runout measures and the envelopes.
+fn column_width(r: &Resolved) -> f64 {
+    match &r.grid {
+        GridBuilt::Terrain(t) => t.cell_width(),
+        GridBuilt::Regular(g) => g.cell_size().x,
+    }
+}
+
+/// takes the solver's current state into the envelopes.
+fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    e: &mut Envelope,
+    r: &Resolved,
+    solver: &Solver<M, S, N>,
+) {
+    let p = solver.particles();
+    e.observe(
+        solver.time(),
+        &r.ground,
+        r.spacing,
+        [&p.position, &p.velocity],
+        [&p.mass, &p.volume],
+    );
+}
+
 /// Why the driver stopped a run before its end time (other than an interrupt).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Stop {
@@ -432,10 +464,7 @@ impl Driver<'_> {
     ) -> RunoutMetrics {
         let r = self.scene.resolved();
         let p = solver.particles();
-        let column = match &r.grid {
-            GridBuilt::Terrain(t) => t.cell_width(),
-            GridBuilt::Regular(g) => g.cell_size().x,
-        };
+        let column = column_width(r);
         summary::runout(
             solver.time(),
             &p.position,
@@ -636,6 +665,26 @@ impl Driver<'_> {
         }
     }
 
+    /// `envelope.csv`, `deposit.csv` and `plots/envelope.png`, when the scene asks for them.
+    fn envelope_files<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let (Some(dir), Some(e)) = (self.dir, &self.history.envelope) else { return Ok(()) };
+        let r = self.scene.resolved();
+        let deposit = envelope::deposit(e, &r.ground, r.spacing, &solver.particles().position);
+        let mut s = csv::ENVELOPE_HEADER.to_string();
+        csv::envelope(&mut s, e);
+        atomic::write(&dir.join("envelope.csv"), s.as_bytes())?;
+        let mut s = csv::DEPOSIT_HEADER.to_string();
+        csv::deposit(&mut s, &deposit);
+        atomic::write(&dir.join("deposit.csv"), s.as_bytes())?;
+        if r.output.plots {
+            report::envelope(&dir.join("plots"), e, &deposit)?;
+        }
+        Ok(())
+    }
+
     fn plots<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         &self,
         solver: &Solver<M, S, N>,
@@ -662,6 +711,9 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         h.dt_max = h.dt_max.max(report.dt);
         if h.dt_first == 0.0 {
             h.dt_first = report.dt;
+        }
+        if let Some(e) = &mut h.envelope {
+            observe(e, r, solver);
         }
         let t = report.time;
         let series = slot(t, r.output.series_interval);

@@ -32,8 +32,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// carries the output time, the solver state the time step's reference densities; 3: the
 /// header with length and checksum, the history the energy check; 4: particle stresses carry
 /// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
-/// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse).
-pub const FORMAT: u32 = 6;
+/// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse; 7: the history
+/// carries the hazard envelopes).
+pub const FORMAT: u32 = 7;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -199,6 +200,9 @@ pub struct History {
     /// when the energy alarm first tripped (s).
     #[serde(default)]
     pub alarm_time: Option<f64>,
+    /// the hazard envelopes so far, when the scene asks for them.
+    #[serde(default)]
+    pub envelope: Option<mpm_scene::envelope::Envelope>,
 }
 
 #[cfg(test)]

@@ -161,6 +161,37 @@ pub fn section(s: &mut String, stations: &[mpm_dem::Station]) {
     }
 }
 
+/// header line of `envelope.csv`: per ground station (column centre x), the maxima over the
+/// run and the first arrival (empty: never reached).
+pub const ENVELOPE_HEADER: &str =
+    "x,ground,max_thickness,max_mean_speed,max_speed,max_pressure,arrival_time\n";
+
+/// appends the stations of `e` to `s`.
+pub fn envelope(s: &mut String, e: &mpm_scene::envelope::Envelope) {
+    for p in &e.stations {
+        let _ = write!(
+            s,
+            "{},{},{},{},{},{},",
+            p.x, p.ground, p.max_thickness, p.max_mean_speed, p.max_speed, p.max_pressure
+        );
+        if let Some(t) = p.arrival {
+            let _ = write!(s, "{t}");
+        }
+        s.push('\n');
+    }
+}
+
+/// header line of `deposit.csv`: the final deposit's thickness normal to the ground per
+/// station.
+pub const DEPOSIT_HEADER: &str = "x,ground,thickness\n";
+
+/// appends the deposit's (x, ground, thickness) rows to `s`.
+pub fn deposit(s: &mut String, rows: &[(f64, f64, f64)]) {
+    for (x, g, h) in rows {
+        let _ = writeln!(s, "{x},{g},{h}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use mpm_scene::envelope::{self, Envelope};
 use mpm_scene::summary;
 use mpm_scene::{GridBuilt, RunoutMetrics, Scene, ground_height};
 use mpm_solver::Vector;
@@ -198,5 +199,58 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
             },
             Series { name: "ground".into(), points: ground_sorted, style: Style::Thick, color: 5 },
         ],
+    )
+}
+
+/// `envelope.png`: along the path, the ground with the highest flow surface and the final
+/// deposit above it, then the three maxima: flow thickness, speed (depth-averaged and of a
+/// particle) and impact pressure.
+pub fn envelope(
+    plot_dir: &Path,
+    e: &Envelope,
+    deposit: &[(f64, f64, f64)],
+) -> Result<(), OutputError> {
+    let along = |f: &dyn Fn(&envelope::Station) -> f64| -> Vec<(f64, f64)> {
+        e.stations.iter().filter(|s| s.arrival.is_some()).map(|s| (s.x, f(s))).collect()
+    };
+    let series =
+        |name: &str, points, style, color| Series { name: name.into(), points, style, color };
+    let ground: Vec<(f64, f64)> = e.stations.iter().map(|s| (s.x, s.ground)).collect();
+    let profile = [
+        series("ground", ground, Style::Thick, 6),
+        series("ground + max thickness", along(&|s| s.ground + s.max_thickness), Style::Line, 1),
+        series(
+            "ground + deposit thickness",
+            deposit.iter().filter(|d| d.2 > 0.0).map(|d| (d.0, d.1 + d.2)).collect(),
+            Style::Points,
+            0,
+        ),
+    ];
+    let thickness = [series("max thickness", along(&|s| s.max_thickness), Style::Line, 1)];
+    let speed = [
+        series("depth-averaged", along(&|s| s.max_mean_speed), Style::Line, 0),
+        series("particle", along(&|s| s.max_speed), Style::Dashed, 3),
+    ];
+    let pressure = [series("max ρū²", along(&|s| 1e-3 * s.max_pressure), Style::Line, 4)];
+    let chart = |title, y_label| Chart {
+        title,
+        x_label: "x (m)",
+        y_label,
+        size: (0, 0),
+        equal_aspect: false,
+    };
+    plots::figure(
+        &plot_dir.join("envelope.png"),
+        &[
+            (chart("Path: ground, highest flow surface, deposit", "height (m)"), &profile[..]),
+            (
+                chart("Maximum flow thickness (normal to the ground)", "thickness (m)"),
+                &thickness[..],
+            ),
+            (chart("Maximum speed", "speed (m/s)"), &speed[..]),
+            (chart("Maximum impact pressure", "pressure (kPa)"), &pressure[..]),
+        ],
+        1,
+        (1000, 1400),
     )
 }

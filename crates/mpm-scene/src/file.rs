@@ -597,10 +597,12 @@ pub struct OutputSpec {
     /// Ctrl-C).
     #[serde(default)]
     pub checkpoint_interval: Option<f64>,
+    /// write hazard envelopes along the path (`envelope.csv`, `deposit.csv`,
+    /// `plots/envelope.png`), default false.
+    #[serde(default)]
+    pub envelope: Option<bool>,
 }
 
-/// 2-vectors that are exactly two values: serde's arrays read the first two elements of a longer
-/// TOML array and ignore the rest (`cell = [0.25, 0.25, 0.25]` was accepted).
 /// A polyline `[[x, y], ...]` (m), written inline or read from a file ([`PolylineFile`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
@@ -681,6 +683,8 @@ pub struct PolylineFile {
     pub spacing: Option<f64>,
 }
 
+/// 2-vectors that are exactly two values: serde's arrays read the first two elements of a longer
+/// TOML array and ignore the rest (`cell = [0.25, 0.25, 0.25]` was accepted).
 mod exact {
     use serde::de::Error;
     use serde::{Deserialize, Deserializer};

@@ -9,6 +9,8 @@
 //!   (`validate/`: solver, grid, materials, bodies, boundaries, output).
 //! - [`embedded_scene`] returns the paper's scenes compiled in (the default is the dry-sand flume
 //!   of §7); [`presets`] the measured speed/accuracy settings.
+//! - [`envelope`]: hazard envelopes along the path (maxima of thickness, speed and impact
+//!   pressure per ground station, first arrival, final deposit).
 //! - [`summary`]: what a run reports ([`RunSummary`]) and the runout measures it is built from.
 //! - [`materials`] is the registry of constitutive models a scene can name (`kind = "elastic" |
 //!   "drucker_prager" | "mu_i"`), one line per model.
@@ -30,6 +32,7 @@
 #![allow(clippy::result_large_err)]
 
 pub mod dispatch;
+pub mod envelope;
 mod error;
 pub mod file;
 pub mod limits;

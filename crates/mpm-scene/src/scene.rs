@@ -79,6 +79,8 @@ pub struct ResolvedOutput {
     pub vtk_format: VtkFormat,
     /// whether PNG plots are drawn at the end.
     pub plots: bool,
+    /// whether hazard envelopes along the path are recorded (every step) and written.
+    pub envelope: bool,
     /// the probed particles' indices.
     pub probes: Vec<usize>,
     /// the analytic curve the first probe is compared with.

@@ -55,6 +55,16 @@ fn short_runs_write_every_output_file() {
             let len = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
             assert!(len > 0, "{name}: {file} missing or empty");
         }
+        // the flume asks for hazard envelopes; the others pay nothing for them
+        for file in ["envelope.csv", "deposit.csv", "plots/envelope.png"] {
+            assert_eq!(dir.join(file).exists(), name == "flume", "{name}: {file}");
+        }
+        if name == "flume" {
+            let e = std::fs::read_to_string(dir.join("envelope.csv")).unwrap();
+            assert!(e.starts_with(mpm_output::csv::ENVELOPE_HEADER), "{e}");
+            // one station per 0.1 m column over the 5 m ground
+            assert_eq!(e.lines().count(), 1 + 50);
+        }
         // no temporary files left behind
         for sub in ["", "frames", "plots"] {
             for e in std::fs::read_dir(dir.join(sub)).unwrap().flatten() {
@@ -247,7 +257,7 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
     let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
     assert!(matches!(err, RunError::Output(OutputError::Checkpoint { .. })), "{err}");
-    assert!(err.to_string().contains("format 1 but this mpm reads format 6"), "{err}");
+    assert!(err.to_string().contains("format 1 but this mpm reads format 7"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

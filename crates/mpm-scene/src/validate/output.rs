@@ -83,6 +83,7 @@ pub(super) fn build(
         probes,
         reference,
         checkpoint_interval: o.checkpoint_interval,
+        envelope: o.envelope.unwrap_or(false),
     })
 }
 
