@@ -64,7 +64,7 @@ fn closure(s: &RunSummary) -> f64 {
 
 fn finite(s: &RunSummary) -> bool {
     let e = &s.energy;
-    let r = &s.runout;
+    let r = &s.runout.last;
     [
         e.kinetic,
         e.strain,
@@ -107,7 +107,7 @@ pub fn verify_rows(table: &mut Table, notes: &mut String) {
     let summary = scene().and_then(|s| run(&s, &Discretisation::paper(0.1)));
     match summary {
         Ok(s) => {
-            let r = &s.runout;
+            let r = &s.runout.last;
             push(
                 "front position x_f at 3 s (m)",
                 "no exact answer",
@@ -222,7 +222,7 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
             d.ppc * d.ppc,
             d.scheme.name(),
             d.courant,
-            r.as_ref().map(|s| num(s.runout.front_x)).unwrap_or_default(),
+            r.as_ref().map(|s| num(s.runout.last.front_x)).unwrap_or_default(),
             r.as_ref().err().map(|e| format!("  FAILED: {e}")).unwrap_or_default()
         );
         measured.push((sweep, d, r, wall));
@@ -240,7 +240,7 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
         }
         return out;
     };
-    let (x_ref, travel_ref) = (reference.runout.front_x, reference.runout.front_travel);
+    let (x_ref, travel_ref) = (reference.runout.last.front_x, reference.runout.last.front_travel);
     let _ = writeln!(
         out,
         "No exact answer: the reference is the finest run ({finest} m cells, 2 × 2 particles per cell, USAVG, C = 0.1, {} particles): \
@@ -267,12 +267,12 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
             Ok(s) => {
                 let is_ref = sweep == "cell-bilinear" && d.cell == finest;
                 let error =
-                    if is_ref { 0.0 } else { (s.runout.front_x - x_ref).abs() / travel_ref };
+                    if is_ref { 0.0 } else { (s.runout.last.front_x - x_ref).abs() / travel_ref };
                 let run = Run {
                     case: Case::Flume,
                     sweep: sweep.clone(),
                     d,
-                    value: s.runout.front_x,
+                    value: s.runout.last.front_x,
                     error,
                     energy: closure(&s),
                     wall,
@@ -286,7 +286,7 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
                         (d.ppc * d.ppc).to_string(),
                         d.scheme.name().into(),
                         num(d.courant),
-                        num(s.runout.front_x),
+                        num(s.runout.last.front_x),
                         if is_ref { "reference".into() } else { pct(error) },
                         pct(run.energy),
                         format!("{wall:.2}"),

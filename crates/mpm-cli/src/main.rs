@@ -462,14 +462,27 @@ fn print_summary(s: &RunSummary, out: &Path) {
         "mpm: front x = {:.3} m (travel {:.3} m), tail x = {:.3} m, max thickness {:.3} m, \
          centre of mass travel {:.3} m; energy residual {:.3e} J/m ({:+.2} % of the energy \
          scale, worst {:+.2} %)",
-        s.runout.front_x,
-        s.runout.front_travel,
-        s.runout.tail_x,
-        s.runout.max_thickness,
-        s.runout.com_travel,
+        s.runout.last.front_x,
+        s.runout.last.front_travel,
+        s.runout.last.tail_x,
+        s.runout.last.max_thickness,
+        s.runout.last.com_travel,
         s.energy.residual,
         100.0 * s.energy_check.relative_residual,
         100.0 * s.energy_check.worst_relative_residual
+    );
+    let i = &s.runout.indicators;
+    let deg = |a: Option<f64>| a.map_or("–".to_string(), |a| format!("{a:.1}°"));
+    eprintln!(
+        "mpm: travel angle {} (centre of mass {}), max front speed {:.3} m/s at t = {:.3} s, {}",
+        deg(i.travel_angle_deg),
+        deg(i.com_travel_angle_deg),
+        i.max_front_speed,
+        i.max_front_speed_time,
+        i.stop_time.map_or("still moving at the end".to_string(), |t| format!(
+            "stopped at t = {t:.3} s (kinetic energy below {:.0} % of its peak)",
+            100.0 * i.stop_fraction
+        ))
     );
     if let Some(e) = &s.error {
         eprintln!("mpm: {e}");

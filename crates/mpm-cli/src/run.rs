@@ -16,7 +16,9 @@ use std::time::Instant;
 use mpm_grid::ShapeFunctions;
 use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
 use mpm_scene::envelope::{self, Envelope};
-use mpm_scene::summary::{self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
+use mpm_scene::summary::{
+    self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
+};
 use mpm_scene::{GridBuilt, Resolved, Scene, SceneError, ground_height, load_scene_str};
 use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 use serde::{Deserialize, Serialize};
@@ -660,7 +662,22 @@ impl Driver<'_> {
                     alarm_time: h.alarm_time,
                 }
             },
-            runout: h.runout.last().copied().unwrap_or_default(),
+            runout: RunoutReport {
+                last: h.runout.last().copied().unwrap_or_default(),
+                indicators: {
+                    let p = solver.particles();
+                    // the source's top: the highest initial particle's top
+                    let crown = p
+                        .initial_position
+                        .iter()
+                        .copied()
+                        .max_by(|a, b| a.y.total_cmp(&b.y))
+                        .map_or(Vector::ZERO, |c| c + Vector::new(0.0, 0.5 * r.spacing));
+                    let kinetic: Vec<(f64, f64)> =
+                        h.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
+                    summary::indicators(&h.runout, &kinetic, crown, &r.ground)
+                },
+            },
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
         }
     }

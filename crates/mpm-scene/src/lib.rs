@@ -51,7 +51,9 @@ pub use scene::{
     Resolved, ResolvedOutput, Scene, Seed, fnv1a, ground_height, segment_at,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
-pub use summary::{DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics};
+pub use summary::{
+    DtStats, EnergyReport, RunStatus, RunSummary, RunoutIndicators, RunoutMetrics, RunoutReport,
+};
 pub use validate::{load_scene_str, load_scene_str_in};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]

@@ -141,8 +141,8 @@ pub struct RunSummary {
     /// the energy residual against the run's energy scale, and the alarm.
     #[serde(default)]
     pub energy_check: EnergyReport,
-    /// runout metrics at the end.
-    pub runout: RunoutMetrics,
+    /// runout metrics at the end, and the run's runout indicators.
+    pub runout: RunoutReport,
     /// FNV-1a 64 hash (hex) of the final solver state's bytes (particles, clock, dissipation):
     /// equal hashes mean bit-identical runs.
     pub state_hash: String,
@@ -244,4 +244,122 @@ pub fn surface(
             (x, g + h.max(0.0), g)
         })
         .collect()
+}
+
+/// What `summary.json` reports under `runout`: the measures at the end ([`RunoutMetrics`], its
+/// keys at the same level) and the indicators of the whole run ([`RunoutIndicators`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunoutReport {
+    /// the runout measures at the end.
+    #[serde(flatten)]
+    pub last: RunoutMetrics,
+    /// the indicators of the whole run.
+    #[serde(flatten)]
+    pub indicators: RunoutIndicators,
+}
+
+/// The fraction of its peak below which the kinetic energy counts as stopped.
+pub const STOP_FRACTION: f64 = 0.01;
+
+/// Runout indicators of a whole run, as landslide runout analyses state them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunoutIndicators {
+    /// travel angle (Fahrböschung): atan(H/L) from the top of the source (its highest
+    /// particle's top) to the distal end of the deposit's main mass on the ground (degrees);
+    /// `None` when the mass did not move away from below its top.
+    pub travel_angle_deg: Option<f64>,
+    /// centre-of-mass travel angle: atan(Δy/Δx) of the centre of mass's drop over its horizontal
+    /// travel (degrees); `None` without horizontal travel.
+    pub com_travel_angle_deg: Option<f64>,
+    /// largest advance speed of the main mass's front (its end the way the centre of mass
+    /// went) between two series rows (m/s).
+    pub max_front_speed: f64,
+    /// when (the middle of that interval, s).
+    pub max_front_speed_time: f64,
+    /// the first time after its peak that the kinetic energy fell below [`STOP_FRACTION`] of
+    /// the peak (s); `None`: still moving at the end.
+    pub stop_time: Option<f64>,
+    /// the fraction used for `stop_time`.
+    pub stop_fraction: f64,
+}
+
+/// The indicators from the runout series `rows` (x increasing downslope or not), the kinetic
+/// energy series `kinetic` (time, J/m), the source's top `crown` (the highest initial particle
+/// top) and the ground.
+pub fn indicators(
+    rows: &[RunoutMetrics],
+    kinetic: &[(f64, f64)],
+    crown: Vector,
+    ground: &[Vector],
+) -> RunoutIndicators {
+    let mut out = RunoutIndicators { stop_fraction: STOP_FRACTION, ..Default::default() };
+    let (Some(first), Some(last)) = (rows.first(), rows.last()) else { return out };
+    let dx_com = last.com_x - first.com_x;
+    // the distal end lies the way the centre of mass went
+    let distal = if dx_com >= 0.0 { last.front_x } else { last.tail_x };
+    let (h, l) = (crown.y - ground_height(ground, distal), (distal - crown.x).abs());
+    if l > 0.0 && h > 0.0 {
+        out.travel_angle_deg = Some(h.atan2(l).to_degrees());
+    }
+    if dx_com != 0.0 {
+        out.com_travel_angle_deg =
+            Some((first.com_y - last.com_y).atan2(dx_com.abs()).to_degrees());
+    }
+    // the front's advance the way the mass goes (a group that splits off ahead moves the main
+    // mass's front back: not a speed)
+    let (sign, edge): (f64, fn(&RunoutMetrics) -> f64) =
+        if dx_com >= 0.0 { (1.0, |r| r.front_x) } else { (-1.0, |r| r.tail_x) };
+    for w in rows.windows(2) {
+        let dt = w[1].time - w[0].time;
+        if dt > 0.0 {
+            let v = sign * (edge(&w[1]) - edge(&w[0])) / dt;
+            if v > out.max_front_speed {
+                out.max_front_speed = v;
+                out.max_front_speed_time = 0.5 * (w[0].time + w[1].time);
+            }
+        }
+    }
+    let peak =
+        kinetic.iter().enumerate().fold((0, 0.0), |b, (k, r)| if r.1 > b.1 { (k, r.1) } else { b });
+    if peak.1 > 0.0 {
+        out.stop_time =
+            kinetic[peak.0..].iter().find(|r| r.1 < STOP_FRACTION * peak.1).map(|r| r.0);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(time: f64, front_x: f64, com: [f64; 2]) -> RunoutMetrics {
+        RunoutMetrics { time, front_x, com_x: com[0], com_y: com[1], ..Default::default() }
+    }
+
+    /// A source whose top is at (2, 10) above a 30 m flat runout, a deposit whose front stops at
+    /// x = 22: H/L = 10/20, the travel angle atan(0.5) = 26.565°; the centre of mass drops 6 m
+    /// over 12 m: atan(0.5) too. The front moves 4 m in the second 0.5 s interval: 8 m/s at
+    /// 0.75 s (its step back at 1.1 s, a group splitting off ahead, is not a speed). The kinetic energy peaks at 1 s and falls below 1 % of it at 3 s.
+    #[test]
+    fn the_indicators_of_a_known_deposit() {
+        let ground = [Vector::new(0.0, 0.0), Vector::new(30.0, 0.0)];
+        let rows = [
+            row(0.0, 5.0, [2.0, 7.0]),
+            row(0.5, 6.0, [3.0, 6.0]),
+            row(1.0, 10.0, [8.0, 3.0]),
+            row(1.1, 9.0, [8.5, 2.8]), // a group split off ahead: the front steps back
+            row(3.0, 22.0, [14.0, 1.0]),
+        ];
+        let kinetic = [(0.0, 0.0), (1.0, 100.0), (2.0, 5.0), (3.0, 0.5), (4.0, 2.0)];
+        let i = indicators(&rows, &kinetic, Vector::new(2.0, 10.0), &ground);
+        let angle = 0.5f64.atan().to_degrees();
+        // atan2 of exact small numbers: a few ulps
+        assert!((i.travel_angle_deg.unwrap() - angle).abs() < 1e-12, "{i:?}");
+        assert!((i.com_travel_angle_deg.unwrap() - angle).abs() < 1e-12, "{i:?}");
+        assert_eq!((i.max_front_speed, i.max_front_speed_time), (8.0, 0.75));
+        assert_eq!(i.stop_time, Some(3.0));
+        // still moving at the end: no stop time
+        let i = indicators(&rows, &kinetic[..3], Vector::new(2.0, 10.0), &ground);
+        assert_eq!(i.stop_time, None);
+    }
 }

@@ -89,6 +89,12 @@ fn short_runs_write_every_output_file() {
             assert!(json.get(key).is_some(), "{name}: summary.json lacks {key}");
         }
         assert_eq!(json["steps"].as_u64(), Some(summary.steps));
+        // the runout measures at the end and the run's indicators share `runout`
+        for key in
+            ["front_x", "travel_angle_deg", "com_travel_angle_deg", "max_front_speed", "stop_time"]
+        {
+            assert!(json["runout"].get(key).is_some(), "{name}: summary.json lacks runout.{key}");
+        }
         let pvd = std::fs::read_to_string(dir.join("particles.pvd")).unwrap();
         assert_eq!(pvd.matches("<DataSet").count(), 5, "{name}: {pvd}");
         // binary frames: the XML before the appended data names the arrays
@@ -328,8 +334,16 @@ fn the_check_dam_example_holds_the_flow_back() {
     let summary = run_scene(&scene, &opts(&dir)).unwrap();
     assert_eq!(summary.status, RunStatus::Completed);
     // leading_x is the front particle's edge; the crest is at x = 3.107 m
-    assert!(summary.runout.leading_x < 3.107, "passed the dam: {}", summary.runout.leading_x);
-    assert!(summary.runout.leading_x > 2.9, "never reached the dam: {}", summary.runout.leading_x);
+    assert!(
+        summary.runout.last.leading_x < 3.107,
+        "passed the dam: {}",
+        summary.runout.last.leading_x
+    );
+    assert!(
+        summary.runout.last.leading_x > 2.9,
+        "never reached the dam: {}",
+        summary.runout.last.leading_x
+    );
     let worst = summary.energy_check.worst_relative_residual.abs();
     assert!(worst < 0.02, "energy residual {worst}");
 }
@@ -362,7 +376,7 @@ fn the_mu_i_column_collapse_example_spreads_and_stops() {
             .unwrap();
         row[1]
     };
-    let (settled, end) = (front_at(0.8), summary.runout.front_x);
+    let (settled, end) = (front_at(0.8), summary.runout.last.front_x);
     assert!((end - settled).abs() < 1e-3, "still moving: {settled} → {end}");
     // A regression guard, not a validation: the measured ΔL/L0 is 1.84 (the experiments' 1.2
     // is discussed in the example); a run that does not flow (< 1) or runs away (> 2.2) is
