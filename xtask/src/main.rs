@@ -5,9 +5,12 @@
 //! - `study [--quick]`: the speed/accuracy trade (cell size, particles per cell, scheme, shape
 //!   functions, Courant number) on the sliding blocks, the vibrating bar and the flume; CSV,
 //!   convergence orders, Pareto fronts and the three presets, in `target/study/`.
+//! - `dem`: the worked example's synthetic valley-side DEM (ASCII grid and GeoTIFF) and its
+//!   rupture surface, in `docs/examples/valley/`.
 //! - `extremes`: scenes at the edges of the admissible settings, each with its expected outcome
 //!   (completes within the energy bound, or stops with a named error); `target/extremes/`.
 
+mod dem;
 mod extremes;
 mod flume;
 mod plot;
@@ -27,6 +30,7 @@ commands:
   verify [--quick]   run the verification cases of SPEC §6 (--quick: the CI subset, < 3 min)
   study [--quick]    measure the speed/accuracy trade and derive the presets (--quick: fewer runs)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
+  dem                write the worked example's synthetic valley-side DEM (docs/examples/valley/)
   help               this text";
 
 fn main() -> ExitCode {
@@ -41,14 +45,15 @@ fn main() -> ExitCode {
         eprintln!("unknown option `{bad}`\n\n{USAGE}");
         return ExitCode::FAILURE;
     }
-    if quick && command == "extremes" {
-        eprintln!("`extremes` has no --quick option\n\n{USAGE}");
+    if quick && (command == "extremes" || command == "dem") {
+        eprintln!("`{command}` has no --quick option\n\n{USAGE}");
         return ExitCode::FAILURE;
     }
     let result = match command.as_str() {
         "verify" => verify::run(quick),
         "study" => study::run(quick),
         "extremes" => extremes::run(),
+        "dem" => dem::run(),
         "help" | "--help" | "-h" => {
             println!("{USAGE}");
             return ExitCode::SUCCESS;

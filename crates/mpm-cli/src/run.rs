@@ -469,7 +469,7 @@ impl Driver<'_> {
         let column = column_width(r);
         summary::runout(
             solver.time(),
-            &p.position,
+            [&p.position, &p.velocity],
             &p.mass,
             &r.ground,
             r.spacing,

@@ -80,7 +80,7 @@ pub const PROBES_HEADER: &str =
 
 /// header line of `runout.csv`.
 pub const RUNOUT_HEADER: &str =
-    "time,front_x,tail_x,leading_x,front_travel,max_thickness,com_x,com_y,com_travel\n";
+    "time,front_x,tail_x,leading_x,front_travel,max_thickness,com_x,com_y,com_travel,front_speed\n";
 
 /// appends the lines of `rows` to `s`.
 pub fn energy(s: &mut String, rows: &[EnergyRow]) {
@@ -136,7 +136,7 @@ pub fn runout(s: &mut String, rows: &[RunoutMetrics]) {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             r.time,
             r.front_x,
             r.tail_x,
@@ -145,7 +145,8 @@ pub fn runout(s: &mut String, rows: &[RunoutMetrics]) {
             r.max_thickness,
             r.com_x,
             r.com_y,
-            r.com_travel
+            r.com_travel,
+            r.front_speed
         );
     }
 }

@@ -42,3 +42,23 @@ fn an_unknown_scene_name_has_no_text() {
     assert!(embedded_scene("nonexistent").is_none());
     assert!(embedded_scene(mpm_cli::DEFAULT_SCENE).is_some());
 }
+
+/// The valley example's terrain and release mass come from its DEM and rupture CSV; the GeoTIFF
+/// of the same raster gives the same scene particle for particle.
+#[test]
+fn the_valley_example_reads_the_same_from_its_ascii_grid_and_its_geotiff() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../docs/examples/valley_landslide.toml");
+    let asc = mpm_cli::load_scene_file(&path).unwrap();
+    let text =
+        std::fs::read_to_string(&path).unwrap().replace("valley_side.asc", "valley_side.tif");
+    let dir = path.parent().unwrap();
+    let tif = mpm_scene::load_scene_str_in(&text, "valley (GeoTIFF)", dir).unwrap();
+    // ∫ 12 sin²(π s/100) ds over 100 m = 600 m², at 1.25² m² a particle: 384
+    assert_eq!(asc.particle_count(), 384);
+    let (a, b) = (&asc.resolved().seeds, &tif.resolved().seeds);
+    assert_eq!(a.len(), b.len());
+    // the same f64 heights in both files: the same positions, bit for bit
+    assert!(a.iter().zip(b).all(|(p, q)| p.position == q.position));
+    assert_eq!(asc.resolved().ground, tif.resolved().ground);
+}

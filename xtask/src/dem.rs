@@ -1,0 +1,58 @@
+//! `cargo xtask dem`: writes the worked example's terrain — a synthetic valley side as an ESRI
+//! ASCII grid and as a GeoTIFF (the same heights), and the rupture surface of its landslide —
+//! into `docs/examples/valley/`.
+//!
+//! The valley side falls from about 197 m to the valley floor along +x (east), steepest (40°)
+//! at x = 250 m; a gully 6 m deep runs down it along y = 150 m and fades out on the floor:
+//!
+//! ```text
+//! z(x, y) = 100 (1 − tanh((x − 250)/120)) − 6 exp(−((y − 150)/40)²) · ½(1 − tanh((x − 300)/100))
+//! ```
+//!
+//! on 120 × 60 cells of 5 m (x ∈ [0, 600], y ∈ [0, 300]). The rupture surface lies under the
+//! section along the gully (from (10, 150) to (590, 150)): between stations 110 and 210 m it
+//! is `12 sin²(π (s − 110)/100)` m below the ground, a 100 m long slide up to 12 m deep whose
+//! rupture surface meets the ground tangentially.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use mpm_dem::Raster;
+
+/// the valley side's height at map point (x, y) (m).
+pub fn height(x: f64, y: f64) -> f64 {
+    let gully = 6.0 * (-((y - 150.0) / 40.0).powi(2)).exp();
+    100.0 * (1.0 - ((x - 250.0) / 120.0).tanh())
+        - gully * 0.5 * (1.0 - ((x - 300.0) / 100.0).tanh())
+}
+
+/// writes the rasters and the rupture surface; returns whether it succeeded.
+pub fn run() -> Result<bool> {
+    let dir = Path::new("docs/examples/valley");
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let (cols, rows, cell, north) = (120usize, 60usize, 5.0, 300.0);
+    let mut z = Vec::with_capacity(cols * rows);
+    for r in 0..rows {
+        for c in 0..cols {
+            z.push(height((c as f64 + 0.5) * cell, north - (r as f64 + 0.5) * cell));
+        }
+    }
+    let raster = Raster::new("valley_side", [cols, rows], cell, [0.0, north], z, None)?;
+    mpm_dem::ascii::write(&raster, &dir.join("valley_side.asc"))?;
+    mpm_dem::geotiff::write(&raster, &dir.join("valley_side.tif"))?;
+    // the rupture surface under the section along y = 150 m, station s = x − 10
+    let mut csv = String::from("# rupture surface under the section (10, 150) → (590, 150)\nx,y\n");
+    for k in 0..=20 {
+        let s = 110.0 + 5.0 * k as f64;
+        let depth = 12.0 * (std::f64::consts::PI * (s - 110.0) / 100.0).sin().powi(2);
+        let ground = raster.height(s + 10.0, 150.0)?;
+        csv.push_str(&format!("{s},{}\n", ground - depth.max(0.0)));
+    }
+    std::fs::write(dir.join("rupture.csv"), csv)?;
+    println!(
+        "wrote {0}/valley_side.asc, {0}/valley_side.tif ({cols} × {rows} cells of {cell} m) and \
+         {0}/rupture.csv",
+        dir.display()
+    );
+    Ok(true)
+}
