@@ -173,7 +173,13 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     }
     let _lock = DirLock::acquire(dir)?;
     let c = checkpoint::read(&path)?;
-    let scene = load_scene_str(&c.scene_text, &c.origin)?;
+    // files the scene names (DEMs, CSV polylines) are relative to the scene file's directory
+    let scene = match Path::new(&c.origin).parent() {
+        Some(d) if !c.origin.starts_with("embedded:") => {
+            mpm_scene::load_scene_str_in(&c.scene_text, &c.origin, d)?
+        }
+        _ => load_scene_str(&c.scene_text, &c.origin)?,
+    };
     fits_its_scene(&c, &scene).map_err(|reason| OutputError::Checkpoint { path, reason })?;
     with_pool(opts, scene.resolved().seeds.len(), |threads| {
         dispatch::dispatch(
@@ -424,13 +430,7 @@ fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     solver: &Solver<M, S, N>,
 ) {
     let p = solver.particles();
-    e.observe(
-        solver.time(),
-        &r.ground,
-        r.spacing,
-        [&p.position, &p.velocity],
-        [&p.mass, &p.volume],
-    );
+    e.observe(solver.time(), r.spacing, [&p.position, &p.velocity], [&p.mass, &p.volume]);
 }
 
 /// Why the driver stopped a run before its end time (other than an interrupt).
@@ -689,7 +689,7 @@ impl Driver<'_> {
     ) -> Result<(), RunError> {
         let (Some(dir), Some(e)) = (self.dir, &self.history.envelope) else { return Ok(()) };
         let r = self.scene.resolved();
-        let deposit = envelope::deposit(e, &r.ground, r.spacing, &solver.particles().position);
+        let deposit = envelope::deposit(e, r.spacing, &solver.particles().position);
         let mut s = csv::ENVELOPE_HEADER.to_string();
         csv::envelope(&mut s, e);
         atomic::write(&dir.join("envelope.csv"), s.as_bytes())?;

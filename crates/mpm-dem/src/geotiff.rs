@@ -19,6 +19,9 @@ use tiff::tags::Tag;
 use crate::error::DemError;
 use crate::raster::{MAX_CELLS, Raster};
 
+/// The largest compression ratio a raster's declared size may imply before it is decoded.
+const MAX_COMPRESSION: u64 = 1024;
+
 /// GTRasterTypeGeoKey, and its PixelIsPoint value.
 const RASTER_TYPE_KEY: u16 = 1025;
 const PIXEL_IS_POINT: u16 = 2;
@@ -50,10 +53,17 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
         }
     };
     let compression: u16 = d.find_tag_unsigned(Tag::Compression).map_err(tiff)?.unwrap_or(1);
-    if compression == 1 && cols * rows * bits / 8 > bytes {
+    let declared = cols * rows * bits / 8;
+    if compression == 1 && declared > bytes {
         return Err(size(format!(
-            "{} bytes of uncompressed heights, but the file has {bytes} bytes (truncated?)",
-            cols * rows * bits / 8
+            "{declared} bytes of uncompressed heights, but the file has {bytes} bytes (truncated?)"
+        )));
+    }
+    // compressed: elevation data compresses far less than this even over large nodata areas
+    if declared > bytes.saturating_mul(MAX_COMPRESSION) {
+        return Err(size(format!(
+            "{declared} bytes of heights from a file of {bytes} bytes: more than \
+             {MAX_COMPRESSION}× compression, so the header is not to be trusted"
         )));
     }
     let f64s = |tag: Tag, d: &mut Decoder<BufReader<File>>| -> Result<Option<Vec<f64>>, DemError> {

@@ -12,6 +12,7 @@
 //!
 //! Every refusal is a [`DemError`] that names the file and, for the data, the line (ASCII) or
 //! the cell (row, column); a raster's declared size is checked against what its file can hold
+//! (uncompressed: the file's length; compressed: at most 1024× it, and at most 2²⁸ cells)
 //! before anything of that size is allocated.
 //!
 //! Units: map coordinates and heights in metres (a raster in degrees of longitude and latitude

@@ -130,7 +130,10 @@ impl Raster {
     /// the height stored for cell (row from the north, column from the west), `None` for a
     /// hole.
     pub fn at(&self, row: usize, col: usize) -> Option<f64> {
-        let v = *self.z.get(row * self.cols + col)?;
+        if row >= self.rows || col >= self.cols {
+            return None;
+        }
+        let v = self.z[row * self.cols + col];
         (v.is_finite() && Some(v) != self.nodata).then_some(v)
     }
 

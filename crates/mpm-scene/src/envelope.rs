@@ -5,9 +5,10 @@
 //!
 //! A station is a column `[x0 + k·w, x0 + (k+1)·w)` of width `w` over the ground polyline; the
 //! particles whose x falls in it are its flow. Per station and observation:
-//! - thickness normal to the ground: `h = (y_top − g(x)) cos β`, with `y_top` the highest
-//!   particle's top (its centre plus half the particle spacing), `g` the ground height at the
-//!   station's centre and `β` the ground's inclination there;
+//! - thickness normal to the ground: `h = max_p (y_p + s/2 − g(x_p)) cos β`, the largest over
+//!   the column's particles of their top (centre plus half the particle spacing s) above the
+//!   ground under them, with `β` the ground's inclination in the column (the terrain grid's
+//!   ground is straight within a column);
 //! - depth-averaged speed `ū = |Σ m v| / Σ m` over the column's particles; particle speed
 //!   `max |v|`;
 //! - impact pressure `ρ̄ ū²` with the column's bulk density `ρ̄ = Σ m / Σ V` (the dynamic
@@ -27,6 +28,8 @@ pub struct Station {
     pub x: f64,
     /// ground height at the centre (m).
     pub ground: f64,
+    /// the ground's slope dy/dx in the column.
+    pub slope: f64,
     /// largest flow thickness normal to the ground (m).
     pub max_thickness: f64,
     /// largest depth-averaged speed (m/s).
@@ -71,7 +74,9 @@ impl Envelope {
         let stations = (0..n)
             .map(|k| {
                 let x = first.x + (k as f64 + 0.5) * column;
-                Station { x, ground: ground_height(ground, x), ..Default::default() }
+                let (a, b) = segment_at(ground, x);
+                let slope = if b.x != a.x { (b.y - a.y) / (b.x - a.x) } else { 0.0 };
+                Station { x, ground: ground_height(ground, x), slope, ..Default::default() }
             })
             .collect();
         Self { x0: first.x, column, stations }
@@ -82,7 +87,6 @@ impl Envelope {
     pub fn observe(
         &mut self,
         time: f64,
-        ground: &[Vector],
         spacing: f64,
         [position, velocity]: [&[Vector]; 2],
         [mass, volume]: [&[f64]; 2],
@@ -91,11 +95,13 @@ impl Envelope {
             vec![Column { top: f64::NEG_INFINITY, ..Default::default() }; self.stations.len()];
         for i in 0..position.len() {
             let (x, v) = (position[i], velocity[i]);
-            let Some(c) = self.index(x.x).and_then(|k| cols.get_mut(k)) else { continue };
+            let Some(k) = self.index(x.x) else { continue };
             if !(x.is_finite() && v.is_finite()) {
                 continue;
             }
-            c.top = c.top.max(x.y + 0.5 * spacing);
+            let (s, c) = (&self.stations[k], &mut cols[k]);
+            // the particle's top above the ground under it, normal to the ground
+            c.top = c.top.max((x.y + 0.5 * spacing - s.ground - s.slope * (x.x - s.x)) * cos(s));
             c.mass += mass[i];
             c.volume += volume[i];
             c.momentum += mass[i] * v;
@@ -107,7 +113,7 @@ impl Envelope {
                 continue;
             }
             s.arrival.get_or_insert(time);
-            let thickness = (c.top - s.ground).max(0.0) * cos_slope(ground, s.x);
+            let thickness = c.top.max(0.0);
             let mean = if c.mass > 0.0 { c.momentum.length() / c.mass } else { 0.0 };
             let density = if c.volume > 0.0 { c.mass / c.volume } else { 0.0 };
             s.max_thickness = s.max_thickness.max(thickness);
@@ -124,33 +130,23 @@ impl Envelope {
     }
 }
 
-/// cos β of the ground segment under x.
-fn cos_slope(ground: &[Vector], x: f64) -> f64 {
-    let (a, b) = segment_at(ground, x);
-    let d = b - a;
-    if d.length() > 0.0 { d.x.abs() / d.length() } else { 1.0 }
+/// cos β of a station's ground.
+fn cos(s: &Station) -> f64 {
+    1.0 / s.slope.hypot(1.0)
 }
 
 /// The deposit's thickness normal to the ground at each station's centre: (x, ground height,
 /// thickness), from the particles' final positions (zero where the column is empty).
-pub fn deposit(
-    envelope: &Envelope,
-    ground: &[Vector],
-    spacing: f64,
-    positions: &[Vector],
-) -> Vec<(f64, f64, f64)> {
-    let mut top = vec![f64::NEG_INFINITY; envelope.stations.len()];
+pub fn deposit(envelope: &Envelope, spacing: f64, positions: &[Vector]) -> Vec<(f64, f64, f64)> {
+    let mut top = vec![0.0f64; envelope.stations.len()];
     for p in positions.iter().filter(|p| p.is_finite()) {
         if let Some(k) = envelope.index(p.x) {
-            top[k] = top[k].max(p.y + 0.5 * spacing);
+            let s = &envelope.stations[k];
+            let h = (p.y + 0.5 * spacing - s.ground - s.slope * (p.x - s.x)) * cos(s);
+            top[k] = top[k].max(h);
         }
     }
-    envelope
-        .stations
-        .iter()
-        .zip(top)
-        .map(|(s, t)| (s.x, s.ground, (t - s.ground).max(0.0) * cos_slope(ground, s.x)))
-        .collect()
+    envelope.stations.iter().zip(top).map(|(s, h)| (s.x, s.ground, h)).collect()
 }
 
 #[cfg(test)]
@@ -177,7 +173,7 @@ mod tests {
         for step in 0..=2000 {
             let t = step as f64 * dt;
             let pos: Vec<Vector> = start.iter().map(|p| *p + t * v).collect();
-            e.observe(t, &ground, h, [&pos, &vel], [&mass, &volume]);
+            e.observe(t, h, [&pos, &vel], [&mass, &volume]);
         }
         // after 2 s the block covers [4, 5]: stations up to x = 5 have seen it
         for s in &e.stations[..50] {
@@ -193,7 +189,7 @@ mod tests {
             assert!(got >= expect - 1e-12 && got < expect + dt + 1e-12, "{s:?} vs {expect}");
         }
         assert!(e.stations[55].arrival.is_none());
-        let d = deposit(&e, &ground, h, &start.iter().map(|p| *p + 2.0 * v).collect::<Vec<_>>());
+        let d = deposit(&e, h, &start.iter().map(|p| *p + 2.0 * v).collect::<Vec<_>>());
         assert!((d[45].2 - 0.3).abs() < 1e-12 && d[30].2 == 0.0, "{:?}", &d[28..47]);
     }
 
@@ -205,10 +201,14 @@ mod tests {
         let k = 10;
         let x = e.stations[k].x;
         let g = e.stations[k].ground;
-        let pos = [Vector::new(x, g + 0.5), Vector::new(x, g + 0.95)];
-        let zero = [Vector::ZERO; 2];
-        e.observe(0.0, &ground, 0.1, [&pos, &zero], [&[1.0, 1.0], &[1.0, 1.0]]);
+        // a uniform layer 1 m high (vertically): particles at the column's uphill and downhill
+        // edges, their tops 1 m above the ground under each
+        let slope = -30f64.to_radians().tan();
+        let at = |dx: f64| Vector::new(x + dx, g + slope * dx + 0.95);
+        let pos = [at(-0.049), at(0.0), at(0.049)];
+        let zero = [Vector::ZERO; 3];
+        e.observe(0.0, 0.1, [&pos, &zero], [&[1.0; 3], &[1.0; 3]]);
         let expect = 1.0 * 30f64.to_radians().cos();
-        assert!((e.stations[k].max_thickness - expect).abs() < 1e-12);
+        assert!((e.stations[k].max_thickness - expect).abs() < 1e-12, "{:?}", e.stations[k]);
     }
 }

@@ -97,8 +97,8 @@ pub struct RunoutMetrics {
     pub com_y: f64,
     /// distance travelled by the centre of mass since t = 0 (m).
     pub com_travel: f64,
-    /// speed of the main mass's front: |Σ m v| / Σ m over the particles within one column
-    /// behind its front edge (m/s).
+    /// speed of the main mass's front: |Σ m v| / Σ m over the particles whose centres lie
+    /// within one column width behind the frontmost centre of the main mass (m/s).
     #[serde(default)]
     pub front_speed: f64,
 }
@@ -290,8 +290,9 @@ pub struct RunoutIndicators {
     pub max_front_speed: f64,
     /// when (s).
     pub max_front_speed_time: f64,
-    /// the first time after its peak that the kinetic energy fell below [`STOP_FRACTION`] of
-    /// the peak (s); `None`: still moving at the end.
+    /// when the kinetic energy fell below [`STOP_FRACTION`] of its peak for good (the start of
+    /// the last stretch below it, which lasts to the end of the run, s); `None`: still moving
+    /// at the end.
     pub stop_time: Option<f64>,
     /// the fraction used for `stop_time`.
     pub stop_fraction: f64,
@@ -328,8 +329,12 @@ pub fn indicators(
     let peak =
         kinetic.iter().enumerate().fold((0, 0.0), |b, (k, r)| if r.1 > b.1 { (k, r.1) } else { b });
     if peak.1 > 0.0 {
-        out.stop_time =
-            kinetic[peak.0..].iter().find(|r| r.1 < STOP_FRACTION * peak.1).map(|r| r.0);
+        // the start of the last stretch below the threshold, reaching the end of the run: a
+        // mass that dipped below it and sped up again had not stopped
+        let below = |r: &(f64, f64)| r.1 < STOP_FRACTION * peak.1;
+        let tail = &kinetic[peak.0..];
+        let still = tail.iter().rev().take_while(|r| below(r)).count();
+        out.stop_time = (still > 0).then(|| tail[tail.len() - still].0);
     }
     out
 }
@@ -351,7 +356,8 @@ mod tests {
 
     /// A source whose top is at (2, 10) above a 30 m flat runout, a deposit whose front stops at
     /// x = 22: H/L = 10/20, the travel angle atan(0.5) = 26.565°; the centre of mass drops 6 m
-    /// over 12 m: atan(0.5) too. The front is fastest (8 m/s) at 1 s. The kinetic energy peaks at 1 s and falls below 1 % of it at 3 s.
+    /// over 12 m: atan(0.5) too. The front is fastest (8 m/s) at 1 s. The kinetic energy peaks
+    /// at 1 s and stays below 1 % of the peak from 3 s on.
     #[test]
     fn the_indicators_of_a_known_deposit() {
         let ground = [Vector::new(0.0, 0.0), Vector::new(30.0, 0.0)];
@@ -362,7 +368,7 @@ mod tests {
             row(1.1, 9.0, [8.5, 2.8], 7.0),
             row(3.0, 22.0, [14.0, 1.0], 0.1),
         ];
-        let kinetic = [(0.0, 0.0), (1.0, 100.0), (2.0, 5.0), (3.0, 0.5), (4.0, 2.0)];
+        let kinetic = [(0.0, 0.0), (1.0, 100.0), (2.0, 5.0), (3.0, 0.5), (4.0, 0.2)];
         let i = indicators(&rows, &kinetic, Vector::new(2.0, 10.0), &ground);
         let angle = 0.5f64.atan().to_degrees();
         // atan2 of exact small numbers: a few ulps
@@ -372,6 +378,10 @@ mod tests {
         assert_eq!(i.stop_time, Some(3.0));
         // still moving at the end: no stop time
         let i = indicators(&rows, &kinetic[..3], Vector::new(2.0, 10.0), &ground);
+        assert_eq!(i.stop_time, None);
+        // below 1 % at 3 s but moving again at 4 s: not stopped
+        let again = [(0.0, 0.0), (1.0, 100.0), (3.0, 0.5), (4.0, 2.0)];
+        let i = indicators(&rows, &again, Vector::new(2.0, 10.0), &ground);
         assert_eq!(i.stop_time, None);
     }
 }

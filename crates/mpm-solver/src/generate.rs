@@ -61,6 +61,9 @@ pub fn polyline_height(line: &[Vector], x: Real) -> Option<Real> {
     if !(x >= first.x && x <= last.x) {
         return None;
     }
+    if line.len() == 1 {
+        return Some(first.y);
+    }
     let k = line.partition_point(|p| p.x <= x).clamp(1, line.len() - 1);
     let (a, b) = (line[k - 1], line[k]);
     if b.x == a.x {

@@ -157,6 +157,12 @@ end_time = 0.01
     assert_eq!(code, 2);
     assert!(err.contains("below the ground") && err.contains("rupture_surface"), "{err}");
 
+    // a section whose last interval is shorter than half a column (59.2 m at 1 m) is
+    // resampled on the columns, not refused for two points snapping onto one boundary
+    std::fs::write(dir.join("scene.toml"), scene.replace("59.5, 5.0]", "59.7, 5.0]")).unwrap();
+    let (code, _, err) = mpm(&["check", dir.join("scene.toml").to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+
     // a line leaving the raster names the file and the extent
     std::fs::write(dir.join("scene.toml"), scene.replace("59.5, 5.0]", "70.0, 5.0]")).unwrap();
     let (code, _, err) = mpm(&["check", dir.join("scene.toml").to_str().unwrap()]);

@@ -36,18 +36,41 @@ pub(super) fn build(
                 .row_height
                 .ok_or_else(|| ctx.missing("grid.row_height", "terrain grid", "0.1"))?;
             let rows = g.rows.ok_or_else(|| ctx.missing("grid.rows", "terrain grid", "15"))?;
-            let profile = g.profile.as_ref().ok_or_else(|| {
+            let spec = g.profile.as_ref().ok_or_else(|| {
                 ctx.missing("grid.profile", "terrain grid", "[[0.0, 1.0], [5.0, 0.0]]")
             })?;
-            let profile = super::polyline::points(ctx, "grid.profile", profile, cell_width)?;
-            let profile = match &g.rupture_surface {
-                None => profile,
-                Some(r) => {
+            if !(cell_width.is_finite() && cell_width > 0.0) {
+                return Err(ctx.range(
+                    "grid.cell_width",
+                    cell_width,
+                    "> 0 (m), finite",
+                    "give the column width in metres",
+                ));
+            }
+            let profile = super::polyline::points(ctx, "grid.profile", spec, cell_width)?;
+            let too_many = || {
+                ctx.err(
+                    "grid.cell_width",
+                    Some(super::num(cell_width)),
+                    "more than 10⁷ columns over the profile",
+                    "a column width that gives at most 10⁷ columns",
+                    "give the column width in metres",
+                )
+            };
+            // A profile from a file, or with a rupture surface cut in, is resampled on the
+            // column boundaries (its kinks there); one written inline is taken as written.
+            let profile = match (&g.rupture_surface, spec.points()) {
+                (None, Some(_)) => profile,
+                (None, None) => {
+                    super::polyline::check_increasing(ctx, "grid.profile", &profile)?;
+                    super::polyline::on_columns(&profile, cell_width).ok_or_else(too_many)?
+                }
+                (Some(r), _) => {
                     let path = "grid.rupture_surface";
                     let rupture = super::polyline::points(ctx, path, r, cell_width)?;
                     super::polyline::check_increasing(ctx, path, &rupture)?;
                     super::polyline::check_increasing(ctx, "grid.profile", &profile)?;
-                    super::polyline::cut(&profile, &rupture, cell_width)
+                    super::polyline::cut(&profile, &rupture, cell_width).ok_or_else(too_many)?
                 }
             };
             if !(1..=1_000_000).contains(&rows) {

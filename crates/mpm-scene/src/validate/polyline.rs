@@ -60,30 +60,43 @@ pub(super) fn check_increasing(
     Ok(())
 }
 
-/// The ground `profile` with the `rupture` surface cut into it: the lower of the two at the
-/// profile's points and at every column boundary (`x0 + k·cell`) where the rupture surface is
-/// defined, so that the ground's kinks stay on column boundaries.
-pub(super) fn cut(profile: &[[f64; 2]], rupture: &[[f64; 2]], cell: f64) -> Vec<[f64; 2]> {
+/// Most columns a resampled ground may have.
+const MAX_COLUMNS: f64 = 10_000_000.0;
+
+/// The polyline `profile` (x increasing) resampled at the column boundaries `x0 + k·cell` from
+/// its start, and at its end when that lies more than half a column past the last boundary (a
+/// terrain grid snaps an end nearer than that onto the boundary, where it would coincide with
+/// it). Every kink then sits on a column boundary. `None` for more than 10⁷ columns.
+pub(super) fn on_columns(profile: &[[f64; 2]], cell: f64) -> Option<Vec<[f64; 2]>> {
     use mpm_solver::Vector;
     use mpm_solver::generate::polyline_height;
-    let line =
-        |p: &[[f64; 2]]| -> Vec<Vector> { p.iter().map(|q| Vector::new(q[0], q[1])).collect() };
-    let (ground, surface) = (line(profile), line(rupture));
-    let (x0, x_end) = (profile[0][0], profile[profile.len() - 1][0]);
-    let (r0, r1) = (rupture[0][0].max(x0), rupture[rupture.len() - 1][0].min(x_end));
-    let mut xs: Vec<f64> = profile.iter().map(|p| p[0]).collect();
-    if r1 > r0 {
-        let (k0, k1) = (((r0 - x0) / cell).ceil() as i64, ((r1 - x0) / cell).floor() as i64);
-        xs.extend((k0..=k1).map(|k| x0 + k as f64 * cell));
+    let line: Vec<Vector> = profile.iter().map(|q| Vector::new(q[0], q[1])).collect();
+    let (x0, x_end) = (profile.first()?[0], profile.last()?[0]);
+    let n = ((x_end - x0) / cell + 1e-9).floor();
+    if !(n.is_finite() && (0.0..=MAX_COLUMNS).contains(&n)) {
+        return None;
     }
-    xs.sort_by(f64::total_cmp);
-    xs.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * cell);
-    xs.into_iter()
-        .filter_map(|x| {
-            let g = polyline_height(&ground, x)?;
-            Some([x, polyline_height(&surface, x).map_or(g, |r| r.min(g))])
-        })
-        .collect()
+    let mut xs: Vec<f64> = (0..=n as usize).map(|k| (x0 + k as f64 * cell).min(x_end)).collect();
+    if x_end - xs[xs.len() - 1] > 0.5 * cell {
+        xs.push(x_end);
+    }
+    xs.into_iter().map(|x| Some([x, polyline_height(&line, x)?])).collect()
+}
+
+/// The ground `profile`, resampled on the columns ([`on_columns`]), with the `rupture`
+/// surface cut into it: at each point the lower of the two where the rupture surface is
+/// defined.
+pub(super) fn cut(profile: &[[f64; 2]], rupture: &[[f64; 2]], cell: f64) -> Option<Vec<[f64; 2]>> {
+    use mpm_solver::Vector;
+    use mpm_solver::generate::polyline_height;
+    let surface: Vec<Vector> = rupture.iter().map(|q| Vector::new(q[0], q[1])).collect();
+    let mut ground = on_columns(profile, cell)?;
+    for p in &mut ground {
+        if let Some(r) = polyline_height(&surface, p[0]) {
+            p[1] = p[1].min(r);
+        }
+    }
+    Some(ground)
 }
 
 /// `file` relative to the scene's directory.
@@ -193,6 +206,7 @@ fn read_csv(
         ));
     }
     let mut columns = (0usize, 1usize);
+    let mut header = false;
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -200,7 +214,9 @@ fn read_csv(
             continue;
         }
         let cells: Vec<&str> = line.split([',', ';', '\t']).map(str::trim).collect();
-        if out.is_empty() && cells.iter().any(|c| c.parse::<f64>().is_err()) {
+        let number = |i: usize| cells.get(i).is_some_and(|c| c.parse::<f64>().is_ok());
+        if out.is_empty() && !header && !(number(0) && number(1)) {
+            header = true;
             // a header
             let at = |n: &str| cells.iter().position(|c| c.eq_ignore_ascii_case(n));
             if let (Some(s), Some(z)) = (at("station"), at("z")) {
