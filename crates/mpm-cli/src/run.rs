@@ -299,7 +299,7 @@ impl Job for RunJob<'_> {
         };
         if fresh {
             if r.output.envelope {
-                let column = column_width(r);
+                let column = r.grid.column_width();
                 let mut e = Envelope::new(&r.ground, column);
                 observe(&mut e, r, &solver);
                 driver.history.envelope = Some(e);
@@ -415,14 +415,6 @@ struct Driver<'a> {
     stop: Option<Stop>,
 }
 
-/// the grid's column width: the stations of the runout measures and the envelopes.
-fn column_width(r: &Resolved) -> f64 {
-    match &r.grid {
-        GridBuilt::Terrain(t) => t.cell_width(),
-        GridBuilt::Regular(g) => g.cell_size().x,
-    }
-}
-
 /// takes the solver's current state into the envelopes.
 fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     e: &mut Envelope,
@@ -466,7 +458,7 @@ impl Driver<'_> {
     ) -> RunoutMetrics {
         let r = self.scene.resolved();
         let p = solver.particles();
-        let column = column_width(r);
+        let column = r.grid.column_width();
         summary::runout(
             solver.time(),
             [&p.position, &p.velocity],

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use mpm_scene::envelope::{self, Envelope};
 use mpm_scene::summary;
-use mpm_scene::{GridBuilt, RunoutMetrics, Scene, ground_height};
+use mpm_scene::{RunoutMetrics, Scene, ground_height};
 use mpm_solver::Vector;
 
 use crate::OutputError;
@@ -152,10 +152,7 @@ fn runout(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
 fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Result<(), OutputError> {
     let Deposit { positions, initial, time } = *deposit;
     let r = scene.resolved();
-    let column = match &r.grid {
-        GridBuilt::Terrain(t) => t.cell_width(),
-        GridBuilt::Regular(g) => g.cell_size().x,
-    };
+    let column = r.grid.column_width();
     let xs: Vec<f64> = positions.iter().chain(initial).map(|q| q.x).collect();
     let lo = xs.iter().copied().fold(f64::INFINITY, f64::min) - 0.5;
     let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.5;

@@ -28,6 +28,16 @@ pub enum GridBuilt {
     Regular(RegularGrid),
 }
 
+impl GridBuilt {
+    /// the width of a column: the stations of the runout measures, envelopes and DEM sections.
+    pub fn column_width(&self) -> f64 {
+        match self {
+            GridBuilt::Terrain(t) => t.cell_width(),
+            GridBuilt::Regular(g) => g.cell_size().x,
+        }
+    }
+}
+
 /// One material point before the constitutive state is attached.
 #[derive(Clone, Copy, Debug)]
 pub struct Seed {

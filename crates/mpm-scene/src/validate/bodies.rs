@@ -249,10 +249,7 @@ fn between_profiles(
     body: &BodySpec,
     grid: &GridBuilt,
 ) -> Result<Shape, SceneError> {
-    let spacing = match grid {
-        GridBuilt::Terrain(t) => t.cell_width(),
-        GridBuilt::Regular(r) => r.cell_size().x,
-    };
+    let spacing = grid.column_width();
     let mut lines = [Vec::new(), Vec::new()];
     for (k, (name, spec)) in [("top", &body.top), ("bottom", &body.bottom)].into_iter().enumerate()
     {
@@ -271,7 +268,7 @@ fn between_profiles(
                 "give the surface as [[x0, y0], [x1, y1], ...]",
             ));
         }
-        lines[k] = points.iter().map(|p| Vector::new(p[0], p[1])).collect();
+        lines[k] = super::polyline::vectors(&points);
     }
     let [top, bottom] = lines;
     let shape = Shape::BetweenProfiles { top, bottom };

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use mpm_dem::{DemError, Raster};
 
-use super::Ctx;
+use super::{Ctx, pair};
 use crate::error::SceneError;
 use crate::file::{PolylineFile, PolylineSpec};
 
@@ -50,14 +50,19 @@ pub(super) fn check_increasing(
         if !(finite && w[1][0] > w[0][0]) {
             return Err(ctx.err(
                 &format!("{path}[{}]", i + 1),
-                Some(format!("[{}, {}]", w[1][0], w[1][1])),
-                format!("x must increase along the profile (after [{}, {}])", w[0][0], w[0][1]),
+                Some(pair(w[1])),
+                format!("x must increase along the profile (after {})", pair(w[0])),
                 "finite points with x strictly increasing",
                 "list the surface's points from left to right",
             ));
         }
     }
     Ok(())
+}
+
+/// a scene's `[x, y]` points as vectors.
+pub(super) fn vectors(points: &[[f64; 2]]) -> Vec<mpm_solver::Vector> {
+    points.iter().map(|p| mpm_solver::Vector::new(p[0], p[1])).collect()
 }
 
 /// Most columns a resampled ground may have.
@@ -68,9 +73,8 @@ const MAX_COLUMNS: f64 = 10_000_000.0;
 /// terrain grid snaps an end nearer than that onto the boundary, where it would coincide with
 /// it). Every kink then sits on a column boundary. `None` for more than 10⁷ columns.
 pub(super) fn on_columns(profile: &[[f64; 2]], cell: f64) -> Option<Vec<[f64; 2]>> {
-    use mpm_solver::Vector;
     use mpm_solver::generate::polyline_height;
-    let line: Vec<Vector> = profile.iter().map(|q| Vector::new(q[0], q[1])).collect();
+    let line = vectors(profile);
     let (x0, x_end) = (profile.first()?[0], profile.last()?[0]);
     let n = ((x_end - x0) / cell + 1e-9).floor();
     if !(n.is_finite() && (0.0..=MAX_COLUMNS).contains(&n)) {
@@ -87,9 +91,8 @@ pub(super) fn on_columns(profile: &[[f64; 2]], cell: f64) -> Option<Vec<[f64; 2]
 /// surface cut into it: at each point the lower of the two where the rupture surface is
 /// defined.
 pub(super) fn cut(profile: &[[f64; 2]], rupture: &[[f64; 2]], cell: f64) -> Option<Vec<[f64; 2]>> {
-    use mpm_solver::Vector;
     use mpm_solver::generate::polyline_height;
-    let surface: Vec<Vector> = rupture.iter().map(|q| Vector::new(q[0], q[1])).collect();
+    let surface = vectors(rupture);
     let mut ground = on_columns(profile, cell)?;
     for p in &mut ground {
         if let Some(r) = polyline_height(&surface, p[0]) {
