@@ -6,6 +6,7 @@ mod verification {
     pub mod bardenhagen2002;
     pub mod floor;
     pub mod guards;
+    pub mod kinks;
     pub mod objectivity;
     pub mod open_core;
     pub mod small_mass;

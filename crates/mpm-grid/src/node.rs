@@ -34,9 +34,13 @@ impl NodeId {
 /// ghost layer. Which planes are actually walls is the scene's decision, not the grid's.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BoundaryNormals {
-    /// ground / floor (row j ≤ 0): the ground's normal at the node (see
-    /// [`TerrainGrid::node_ground_normal`](crate::TerrainGrid::node_ground_normal) at kinks).
+    /// ground / floor (row j ≤ 0): the ground's normal at the node; at a kink of a terrain
+    /// grid's ground, the normal of the segment on the node's right.
     pub ground: Option<Vector>,
+    /// at a kink of the ground only, the normal of the segment on the node's left (a node on
+    /// or below the ground at a kink lies on both segments' planes, see
+    /// [`TerrainGrid::boundary_normals`](crate::TerrainGrid::boundary_normals)).
+    pub ground_kink: Option<Vector>,
     /// left wall (column i ≤ 0): normal +x.
     pub left_wall: Option<Vector>,
     /// right wall (column i ≥ last column): normal −x.
@@ -46,12 +50,15 @@ pub struct BoundaryNormals {
 impl BoundaryNormals {
     /// true when the node lies on no boundary plane.
     pub fn is_empty(&self) -> bool {
-        self.ground.is_none() && self.left_wall.is_none() && self.right_wall.is_none()
+        self.ground.is_none()
+            && self.ground_kink.is_none()
+            && self.left_wall.is_none()
+            && self.right_wall.is_none()
     }
 
-    /// the normals present, in the order ground, left wall, right wall.
+    /// the normals present, in the order ground, ground kink, left wall, right wall.
     pub fn iter(&self) -> impl Iterator<Item = Vector> + '_ {
-        [self.ground, self.left_wall, self.right_wall].into_iter().flatten()
+        [self.ground, self.ground_kink, self.left_wall, self.right_wall].into_iter().flatten()
     }
 }
 

@@ -172,6 +172,7 @@ impl RegularGrid {
     pub fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
         BoundaryNormals {
             ground: (node.j <= 0).then_some(Vector::Y),
+            ground_kink: None,
             left_wall: (node.i <= 0).then_some(Vector::X),
             right_wall: (i64::from(node.i) >= self.cells[0] as i64).then_some(Vector::NEG_X),
         }

@@ -493,7 +493,8 @@ impl TerrainGrid {
 
     /// unit normal of the ground at node column `i`, pointing into the material: the segment's
     /// normal inside a segment, the normalised average of both segments' normals at a kink, the
-    /// end segment's normal beyond the grid's ends.
+    /// end segment's normal beyond the grid's ends. (A description of the ground; the boundary
+    /// conditions hold a kink node on both segments, see [`Self::boundary_normals`].)
     pub fn node_ground_normal(&self, i: i32) -> Vector {
         match self.ground_segments(i) {
             AdjacentSegments { left: Some(l), right: Some(r) } if l.index != r.index => {
@@ -515,9 +516,32 @@ impl TerrainGrid {
 
     /// boundary planes of a node: ground for j ≤ 0, left wall (+x) for i ≤ 0, right wall (−x)
     /// for i ≥ columns.
+    ///
+    /// At a kink the node carries both segments' planes (`ground`, the right one, and
+    /// `ground_kink`, the left one), not their bisector: a ground node's velocity is interpolated
+    /// into the cells on both sides, so it must be admissible for both segments. Then, with
+    /// bilinear weights (non-negative, a particle's new position is the convex combination of its
+    /// cell's four nodes moved by Δt v_i), a particle above the ground stays above it whenever a
+    /// node moves less than a cell in a step: every moved node of a column lies above that
+    /// column's segment line and above the neighbouring one across a kink. A node held to the
+    /// bisector instead moves below the next segment's line by Δt |v| sin(Δθ/2) along it, and a
+    /// flow sliding over a curved ground of many kinks sinks through it step by step.
     pub fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        let on_ground = node.j <= 0;
+        let kink = match self.ground_segments(node.i) {
+            AdjacentSegments { left: Some(l), right: Some(r) }
+                if on_ground && l.index != r.index && l.normal != r.normal =>
+            {
+                Some((l.normal, r.normal))
+            }
+            _ => None,
+        };
         BoundaryNormals {
-            ground: (node.j <= 0).then(|| self.node_ground_normal(node.i)),
+            ground: match kink {
+                Some((_, right)) => Some(right),
+                None => on_ground.then(|| self.node_ground_normal(node.i)),
+            },
+            ground_kink: kink.map(|(left, _)| left),
             left_wall: (node.i <= 0).then_some(Vector::X),
             right_wall: (node.i as i64 >= self.columns as i64).then_some(Vector::NEG_X),
         }

@@ -318,7 +318,12 @@ fn an_instability_writes_what_was_reached_and_names_the_particle() {
 
 /// The worked example of a wall anywhere: the flume with a 0.4 m check dam at x = 3 m (its crest
 /// at x = 3.107 m). Without it the front runs to about x = 4 m (the flume's summary); with it,
-/// no particle gets past the crest, and the run's energy ledger still closes to its usual size.
+/// the main mass stays behind the crest, and the run's energy ledger still closes to its usual
+/// size. A grain may splash over: the surge reaches the dam at about 3 m/s, enough to lift a
+/// grain v²/2g ≈ 0.46 m, above the 0.39 m crest (one of 336 does, thrown up at 2.2 m/s by the
+/// pile behind the dam at 0.85 s, and lands 0.65 m beyond it on a ballistic path); the main mass
+/// excludes such strays by construction (`RunoutMetrics::front_x`), and no more than a few may
+/// overtop.
 #[test]
 fn the_check_dam_example_holds_the_flow_back() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/check_dam.toml");
@@ -328,22 +333,23 @@ fn the_check_dam_example_holds_the_flow_back() {
         .modified(|f| {
             f.solver.end_time = 1.5;
             f.output.interval = Some(0.5);
+            f.output.envelope = Some(true);
         })
         .unwrap();
     let dir = temp_dir("check_dam");
     let summary = run_scene(&scene, &opts(&dir)).unwrap();
     assert_eq!(summary.status, RunStatus::Completed);
-    // leading_x is the front particle's edge; the crest is at x = 3.107 m
-    assert!(
-        summary.runout.last.leading_x < 3.107,
-        "passed the dam: {}",
-        summary.runout.last.leading_x
-    );
-    assert!(
-        summary.runout.last.leading_x > 2.9,
-        "never reached the dam: {}",
-        summary.runout.last.leading_x
-    );
+    // front_x is the main mass's front edge; the crest is at x = 3.107 m
+    let front = summary.runout.last.front_x;
+    assert!(front < 3.107, "the main mass passed the dam: {front}");
+    assert!(front > 2.9, "never reached the dam: {front}");
+    // beyond the dam lie single grains at most, no layer: the deposit there stays within the
+    // bottom row of cells (0.1 m; a lone grain reads its centre's height plus half a spacing)
+    let deposit = std::fs::read_to_string(dir.join("deposit.csv")).unwrap();
+    for line in deposit.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        assert!(v[0] < 3.2 || v[2] <= 0.1, "a layer beyond the dam: {line}");
+    }
     let worst = summary.energy_check.worst_relative_residual.abs();
     assert!(worst < 0.02, "energy residual {worst}");
 }

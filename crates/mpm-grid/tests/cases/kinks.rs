@@ -35,7 +35,7 @@ fn abe2005_slope_node_normals_are_the_segment_normals() {
 }
 
 #[test]
-fn abe2005_kink_normal_is_the_bisector_of_both_segments() {
+fn abe2005_kink_node_lies_on_both_segment_planes() {
     let g = slope_into_runout();
     let half = 15f64.to_radians();
     let n = g.node_ground_normal(20);
@@ -46,10 +46,14 @@ fn abe2005_kink_normal_is_the_bisector_of_both_segments() {
     assert_eq!(left.end, right.start);
     assert_eq!(right.start, Vector::new(2.0, 0.0));
     assert_eq!(right.normal, Vector::Y);
-    // the boundary-normal interface reports the same ground normal for the kink node.
+    // the boundary conditions hold the kink node on both segments' planes, not the bisector
     let b = Bilinear(g.clone()).boundary_normals(NodeId::new(20, 0));
-    assert_eq!(b.ground, Some(n));
+    assert_eq!((b.ground, b.ground_kink), (Some(right.normal), Some(left.normal)));
     assert!(b.left_wall.is_none() && b.right_wall.is_none());
+    assert_eq!(b.iter().count(), 2);
+    // a node inside a segment, or above the ground, has no kink plane
+    assert_eq!(g.boundary_normals(NodeId::new(7, 0)).ground_kink, None);
+    assert_eq!(g.boundary_normals(NodeId::new(20, 1)).ground_kink, None);
     // inside a segment both neighbours are that segment.
     let inside = g.ground_segments(7);
     assert_eq!(inside.left, inside.right);

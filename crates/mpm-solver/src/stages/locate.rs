@@ -206,6 +206,7 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
         let normals = shape.boundary_normals(node);
         for (law, normal) in [
             (sides.ground, normals.ground),
+            (sides.ground, normals.ground_kink),
             (sides.left_wall, normals.left_wall),
             (sides.right_wall, normals.right_wall),
         ] {
