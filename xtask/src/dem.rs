@@ -3,16 +3,19 @@
 //! into `docs/examples/valley/`.
 //!
 //! The valley side falls from about 197 m to the valley floor along +x (east), steepest (40°)
-//! at x = 250 m; a gully 6 m deep runs down it along y = 150 m and fades out on the floor:
+//! at x = 250 m; the floor (about 2–5 m high, x ≈ 420–500 m) rises again into the foot of the
+//! opposite side (32° at x = 540 m, 45 m high at the east edge); a gully 6 m deep runs down the
+//! valley side along y = 150 m and fades out on the floor:
 //!
 //! ```text
-//! z(x, y) = 100 (1 − tanh((x − 250)/120)) − 6 exp(−((y − 150)/40)²) · ½(1 − tanh((x − 300)/100))
+//! z(x, y) = 100 (1 − tanh((x − 250)/120)) + 25 (1 + tanh((x − 540)/40))
+//!           − 6 exp(−((y − 150)/40)²) · ½(1 − tanh((x − 300)/100))
 //! ```
 //!
 //! on 120 × 60 cells of 5 m (x ∈ [0, 600], y ∈ [0, 300]). The rupture surface lies under the
-//! section along the gully (from (10, 150) to (590, 150)): between stations 110 and 210 m it
-//! is `12 sin²(π (s − 110)/100)` m below the ground, a 100 m long slide up to 12 m deep whose
-//! rupture surface meets the ground tangentially.
+//! section along the gully (from (10, 150) to (590, 150)): between stations 150 and 250 m (on
+//! ground sloping 26°–40°) it is `12 sin²(π (s − 150)/100)` m below the ground, a 100 m long
+//! slide up to 12 m deep whose rupture surface meets the ground tangentially.
 
 use std::path::Path;
 
@@ -22,7 +25,7 @@ use mpm_dem::Raster;
 /// the valley side's height at map point (x, y) (m).
 pub fn height(x: f64, y: f64) -> f64 {
     let gully = 6.0 * (-((y - 150.0) / 40.0).powi(2)).exp();
-    100.0 * (1.0 - ((x - 250.0) / 120.0).tanh())
+    100.0 * (1.0 - ((x - 250.0) / 120.0).tanh()) + 25.0 * (1.0 + ((x - 540.0) / 40.0).tanh())
         - gully * 0.5 * (1.0 - ((x - 300.0) / 100.0).tanh())
 }
 
@@ -43,8 +46,8 @@ pub fn run() -> Result<bool> {
     // the rupture surface under the section along y = 150 m, station s = x − 10
     let mut csv = String::from("# rupture surface under the section (10, 150) → (590, 150)\nx,y\n");
     for k in 0..=20 {
-        let s = 110.0 + 5.0 * k as f64;
-        let depth = 12.0 * (std::f64::consts::PI * (s - 110.0) / 100.0).sin().powi(2);
+        let s = 150.0 + 5.0 * k as f64;
+        let depth = 12.0 * (std::f64::consts::PI * (s - 150.0) / 100.0).sin().powi(2);
         let ground = raster.height(s + 10.0, 150.0)?;
         csv.push_str(&format!("{s},{}\n", ground - depth.max(0.0)));
     }

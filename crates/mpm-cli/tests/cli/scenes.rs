@@ -54,8 +54,11 @@ fn the_valley_example_reads_the_same_from_its_ascii_grid_and_its_geotiff() {
         std::fs::read_to_string(&path).unwrap().replace("valley_side.asc", "valley_side.tif");
     let dir = path.parent().unwrap();
     let tif = mpm_scene::load_scene_str_in(&text, "valley (GeoTIFF)", dir).unwrap();
-    // ∫ 12 sin²(π s/100) ds over 100 m = 600 m², at 1.25² m² a particle: 384
-    assert_eq!(asc.particle_count(), 384);
+    // ∫ 12 sin²(π s/100) ds over 100 m = 600 m², at 1.25² m² a particle: 384; a column keeps
+    // its top particle when at least half of it lies below the ground, so the thin ends of the
+    // slide may gain or lose one each
+    let n = asc.particle_count();
+    assert!((382..=386).contains(&n), "{n}");
     let (a, b) = (&asc.resolved().seeds, &tif.resolved().seeds);
     assert_eq!(a.len(), b.len());
     // the same f64 heights in both files: the same positions, bit for bit
