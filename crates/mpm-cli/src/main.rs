@@ -484,6 +484,18 @@ fn print_summary(s: &RunSummary, out: &Path) {
             100.0 * i.stop_fraction
         ))
     );
+    if let Some(o) = &s.observed {
+        eprintln!(
+            "mpm: against the observed deposit ({}): front {:+.3} m, tail {:+.3} m, RMS \
+             thickness error {:.3} m (observed up to {:.3} m), overlap (IoU) {:.3}",
+            o.file,
+            o.front_error,
+            o.tail_error,
+            o.rms_thickness_error,
+            o.max_observed_thickness,
+            o.iou
+        );
+    }
     if let Some(e) = &s.error {
         eprintln!("mpm: {e}");
     }

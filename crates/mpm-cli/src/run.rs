@@ -16,6 +16,7 @@ use std::time::Instant;
 use mpm_grid::ShapeFunctions;
 use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
 use mpm_scene::envelope::{self, Envelope};
+use mpm_scene::observed;
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
@@ -670,6 +671,13 @@ impl Driver<'_> {
                     summary::indicators(&h.runout, &kinetic, crown, &r.ground)
                 },
             },
+            observed: r.output.observed.as_ref().and_then(|o| {
+                let p = solver.particles();
+                let sim =
+                    observed::simulated(&r.ground, r.grid.column_width(), r.spacing, &p.position);
+                let last = h.runout.last().copied().unwrap_or_default();
+                observed::compare(o, &sim, last.front_x, last.tail_x)
+            }),
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
         }
     }

@@ -147,8 +147,8 @@ fn runout(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// `deposit.png`: the particles at the end over their initial place, the free surface and the
-/// ground.
+/// `deposit.png`: the particles at the end over their initial place, the free surface, the
+/// ground, and the observed deposit's surface when the scene gives one.
 fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Result<(), OutputError> {
     let Deposit { positions, initial, time } = *deposit;
     let r = scene.resolved();
@@ -195,7 +195,16 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
                 color: 1,
             },
             Series { name: "ground".into(), points: ground_sorted, style: Style::Thick, color: 5 },
-        ],
+        ]
+        .into_iter()
+        .chain(r.output.observed.as_ref().map(|o| Series {
+            name: "observed deposit".into(),
+            points:
+                o.points.iter().map(|p| (p[0], ground_height(&r.ground, p[0]) + p[1])).collect(),
+            style: Style::Line,
+            color: 3,
+        }))
+        .collect::<Vec<_>>(),
     )
 }
 

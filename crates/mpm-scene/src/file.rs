@@ -601,6 +601,19 @@ pub struct OutputSpec {
     /// `plots/envelope.png`), default false.
     #[serde(default)]
     pub envelope: Option<bool>,
+    /// an observed deposit to compare the run's with (`summary.json` `observed`, the end-of-run
+    /// line, `plots/deposit.png`).
+    #[serde(default)]
+    pub observed: Option<ObservedSpec>,
+}
+
+/// `[output] observed = { deposit = "observed.csv" }`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObservedSpec {
+    /// CSV of the observed deposit, relative to the scene file: a header naming `x` and
+    /// `thickness` (vertical, m) or `x` and `surface` (the deposit's top elevation, m).
+    pub deposit: String,
 }
 
 /// A polyline `[[x, y], ...]` (m), written inline or read from a file ([`PolylineFile`]).

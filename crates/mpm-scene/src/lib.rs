@@ -11,6 +11,8 @@
 //!   of §7); [`presets`] the measured speed/accuracy settings.
 //! - [`envelope`]: hazard envelopes along the path (maxima of thickness, speed and impact
 //!   pressure per ground station, first arrival, final deposit).
+//! - [`observed`]: comparison of the deposit with an observed one (front, tail, RMS
+//!   thickness error, overlap).
 //! - [`summary`]: what a run reports ([`RunSummary`]) and the runout measures it is built from.
 //! - [`materials`] is the registry of constitutive models a scene can name (`kind = "elastic" |
 //!   "drucker_prager" | "mu_i"`), one line per model.
@@ -37,6 +39,7 @@ mod error;
 pub mod file;
 pub mod limits;
 pub mod materials;
+pub mod observed;
 pub mod presets;
 mod scene;
 mod scenes;

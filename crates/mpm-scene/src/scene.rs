@@ -91,6 +91,8 @@ pub struct ResolvedOutput {
     pub plots: bool,
     /// whether hazard envelopes along the path are recorded (every step) and written.
     pub envelope: bool,
+    /// the observed deposit the run's is compared with.
+    pub observed: Option<crate::observed::ObservedDeposit>,
     /// the probed particles' indices.
     pub probes: Vec<usize>,
     /// the analytic curve the first probe is compared with.

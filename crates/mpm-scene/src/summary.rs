@@ -147,6 +147,9 @@ pub struct RunSummary {
     pub energy_check: EnergyReport,
     /// runout metrics at the end, and the run's runout indicators.
     pub runout: RunoutReport,
+    /// the deposit against the observed one, when the scene gives one (`[output] observed`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub observed: Option<crate::observed::DepositComparison>,
     /// FNV-1a 64 hash (hex) of the final solver state's bytes (particles, clock, dissipation):
     /// equal hashes mean bit-identical runs.
     pub state_hash: String,

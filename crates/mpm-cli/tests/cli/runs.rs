@@ -390,3 +390,51 @@ fn the_mu_i_column_collapse_example_spreads_and_stops() {
     let spread = (end - 0.2) / 0.2;
     assert!((1.0..2.2).contains(&spread), "ΔL/L0 = {spread}");
 }
+
+/// `[output] observed`: a run compared with its own deposit (the `deposit.csv` of the same run,
+/// on flat ground where the envelope's thickness is the vertical one) matches it exactly, and
+/// with that deposit moved 1 m downstream it is 1 m short at both ends and overlaps it less.
+#[test]
+fn a_run_compared_with_an_observed_deposit_reports_its_errors_and_overlap() {
+    // the block slides on a 0.3 friction floor from 10 m/s and stops after about 17 m
+    let base = |observed: Option<&Path>| {
+        short("sliding_horizontal", 4.0)
+            .modified(|f| {
+                f.output.probes = None;
+                f.output.reference = None;
+                f.output.envelope = Some(true);
+                f.output.observed = observed
+                    .map(|p| mpm_cli::scene::ObservedSpec { deposit: p.display().to_string() });
+            })
+            .unwrap()
+    };
+    let first = temp_dir("observed_source");
+    let s = run_scene(&base(None), &opts(&first)).unwrap();
+    assert!(s.observed.is_none());
+    let deposit = first.join("deposit.csv");
+    let dir = temp_dir("observed_same");
+    let same = run_scene(&base(Some(&deposit)), &opts(&dir)).unwrap().observed.unwrap();
+    assert_eq!((same.iou, same.rms_thickness_error), (1.0, 0.0), "{same:?}");
+    // the observed front is the first empty station past the deposit: within a column (0.5 m)
+    // of the main mass's front plus half a particle spacing
+    assert!(same.front_error.abs() <= 0.5 && same.tail_error.abs() <= 0.5, "{same:?}");
+    let json = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(json.contains("\"observed\"") && json.contains("\"iou\": 1.0"), "{json}");
+    // the same deposit 1 m further: two columns of the 1 m wide block's two are no longer shared
+    let text = std::fs::read_to_string(&deposit).unwrap();
+    let mut moved = String::from("x,thickness\n");
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        moved.push_str(&format!("{},{}\n", v[0] + 1.0, v[2]));
+    }
+    let moved_file = first.join("moved.csv");
+    std::fs::write(&moved_file, moved).unwrap();
+    let dir2 = temp_dir("observed_moved");
+    let m = run_scene(&base(Some(&moved_file)), &opts(&dir2)).unwrap().observed.unwrap();
+    assert!((m.front_error - (same.front_error - 1.0)).abs() < 1e-9, "{m:?}");
+    assert!((m.tail_error - (same.tail_error - 1.0)).abs() < 1e-9, "{m:?}");
+    assert!(m.iou < 0.5 && m.rms_thickness_error > 0.5, "{m:?}");
+    for d in [first, dir, dir2] {
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}

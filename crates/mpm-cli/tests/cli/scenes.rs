@@ -65,3 +65,41 @@ fn the_valley_example_reads_the_same_from_its_ascii_grid_and_its_geotiff() {
     assert!(a.iter().zip(b).all(|(p, q)| p.position == q.position));
     assert_eq!(asc.resolved().ground, tif.resolved().ground);
 }
+
+/// A bad observed deposit is refused naming its file and what to fix; a surface is turned into
+/// the thickness above the ground.
+#[test]
+fn an_observed_deposit_is_read_checked_and_explained() {
+    let dir = crate::temp_dir("observed_files");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = format!(
+        "{}\nobserved = {{ deposit = \"o.csv\" }}\n",
+        mpm_cli::embedded_scene("sliding_horizontal").unwrap()
+    );
+    let load = |csv: &str| {
+        std::fs::write(dir.join("o.csv"), csv).unwrap();
+        mpm_scene::load_scene_str_in(&text, "observed.toml", &dir).map_err(|e| e.to_string())
+    };
+    for (csv, expect) in [
+        ("1,0\n2,0.5\n", "no header line"),
+        ("x,y\n1,0\n2,0.5\n", "names one of `thickness`"),
+        ("station,thickness\n1,0\n2,0.5\n", "`x,thickness` or `x,surface`"),
+        ("x,thickness\n1,0\n2,-0.5\n", "negative thickness -0.5 at x = 2"),
+        ("x,thickness\n1,0\n1,0.5\n", "x does not increase at x = 1 then 1"),
+        ("x,thickness\n1,0\n2,0\n", "no deposit"),
+        ("x,thickness\n1,0\n2,abc\n", "line 3: column 2 is not a finite number"),
+        // the floor is at y = 0: a surface below it is no deposit
+        ("x,surface\n1,-0.2\n2,-0.1\n", "no deposit"),
+    ] {
+        let err = load(csv).unwrap_err();
+        assert!(err.contains("o.csv") && err.contains(expect), "{csv:?}: {err}");
+        assert!(err.contains("output.observed.deposit"), "{err}");
+    }
+    let s = load("x,surface\n1,-0.2\n2,0.3\n3,0.0\n").unwrap();
+    let o = s.resolved().output.observed.as_ref().unwrap();
+    assert_eq!(o.points, vec![[1.0, 0.0], [2.0, 0.3], [3.0, 0.0]]);
+    std::fs::remove_file(dir.join("o.csv")).unwrap();
+    let err = mpm_scene::load_scene_str_in(&text, "observed.toml", &dir).unwrap_err().to_string();
+    assert!(err.contains("o.csv") && err.contains("cannot read"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

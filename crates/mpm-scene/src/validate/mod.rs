@@ -292,8 +292,15 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;
-    let output =
-        output::build(ctx, &f.output, end_time, &seeds, &grid, &config.boundaries, config.gravity)?;
+    let output = output::build(
+        ctx,
+        &f.output,
+        end_time,
+        &seeds,
+        (&grid, &ground),
+        &config.boundaries,
+        config.gravity,
+    )?;
     Ok(Resolved {
         grid,
         shape_function,

@@ -3,11 +3,12 @@
 use mpm_contact::{Friction, RigidSlide};
 use mpm_solver::{Boundaries, Vector};
 
-use super::{Ctx, finite_pos, pair};
+use super::{Ctx, finite_pos, pair, polyline};
 use crate::error::SceneError;
-use crate::file::{OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
+use crate::file::{ObservedSpec, OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
 use crate::limits::MAX_PROBES;
-use crate::scene::{GridBuilt, Reference, ResolvedOutput, Seed, segment_at};
+use crate::observed::ObservedDeposit;
+use crate::scene::{GridBuilt, Reference, ResolvedOutput, Seed, ground_height, segment_at};
 
 /// The output plan of a run that ends at `end_time` (s).
 pub(super) fn build(
@@ -15,7 +16,7 @@ pub(super) fn build(
     o: &OutputSpec,
     end_time: f64,
     seeds: &[Seed],
-    grid: &GridBuilt,
+    (grid, ground): (&GridBuilt, &[Vector]),
     boundaries: &Boundaries,
     gravity: Vector,
 ) -> Result<ResolvedOutput, SceneError> {
@@ -84,7 +85,69 @@ pub(super) fn build(
         reference,
         checkpoint_interval: o.checkpoint_interval,
         envelope: o.envelope.unwrap_or(false),
+        observed: match &o.observed {
+            None => None,
+            Some(spec) => Some(observed(ctx, spec, ground)?),
+        },
     })
+}
+
+/// The observed deposit of `[output] observed`: its CSV read and checked, a surface turned into
+/// the thickness above `ground`.
+fn observed(
+    ctx: &Ctx<'_>,
+    spec: &ObservedSpec,
+    ground: &[Vector],
+) -> Result<ObservedDeposit, SceneError> {
+    let field = "output.observed.deposit";
+    let surface = std::cell::Cell::new(false);
+    let columns = |cells: &[&str]| {
+        let at = |n: &str| cells.iter().position(|c| c.eq_ignore_ascii_case(n));
+        let x = at("x").ok_or("name the columns in the header: `x,thickness` or `x,surface`")?;
+        match (at("thickness"), at("surface")) {
+            (Some(h), None) => Ok((x, h)),
+            (None, Some(z)) => {
+                surface.set(true);
+                Ok((x, z))
+            }
+            _ => Err("the header names one of `thickness` (vertical, m) or `surface` (m)".into()),
+        }
+    };
+    let path = polyline::file_path(ctx, &spec.deposit);
+    let (mut points, header) = polyline::read_pairs(ctx, field, &path, &columns)?;
+    let name = path.display();
+    let fail = |problem: String, fix: &str| ctx.err(field, None, problem, "", fix);
+    if !header {
+        return Err(fail(
+            format!("{name}: no header line"),
+            "begin the file with `x,thickness` (vertical thickness, m) or `x,surface` (the \
+             deposit's top elevation, m)",
+        ));
+    }
+    if let Some(w) = points.windows(2).find(|w| w[1][0] <= w[0][0]) {
+        return Err(fail(
+            format!("{name}: x does not increase at x = {} then {}", w[0][0], w[1][0]),
+            "sort the points by x, one per x",
+        ));
+    }
+    if surface.get() {
+        for p in &mut points {
+            // a surface below the ground is no deposit (a survey's noise)
+            p[1] = (p[1] - ground_height(ground, p[0])).max(0.0);
+        }
+    } else if let Some(p) = points.iter().find(|p| p[1] < 0.0) {
+        return Err(fail(
+            format!("{name}: negative thickness {} at x = {}", p[1], p[0]),
+            "give thicknesses ≥ 0 (0 where there is no deposit)",
+        ));
+    }
+    if points.iter().all(|p| p[1] <= 0.0) {
+        return Err(fail(
+            format!("{name}: no deposit (the thickness is zero everywhere)"),
+            "give the deposit's thickness where it lies",
+        ));
+    }
+    Ok(ObservedDeposit { file: spec.deposit.clone(), points })
 }
 
 /// The probed particles' indices.

@@ -185,11 +185,32 @@ fn dem_error(ctx: &Ctx<'_>, field: &str, e: DemError) -> SceneError {
 
 /// Reads a CSV polyline: columns `station` and `z` if the header names them (what `mpm section`
 /// writes), else the first two columns as x and y. An optional header line; `#` comments.
+/// a polyline's CSV: (x, y), or station and z under a header that names them.
 fn read_csv(
     ctx: &Ctx<'_>,
     field: &str,
     file: &std::path::Path,
 ) -> Result<Vec<[f64; 2]>, SceneError> {
+    let columns = |cells: &[&str]| {
+        let at = |n: &str| cells.iter().position(|c| c.eq_ignore_ascii_case(n));
+        Ok(at("station").zip(at("z")).unwrap_or((0, 1)))
+    };
+    Ok(read_pairs(ctx, field, file, &columns)?.0)
+}
+
+/// picks two columns from a header's cells, or says how to fix the header.
+pub(super) type PickColumns<'a> = dyn Fn(&[&str]) -> Result<(usize, usize), String> + 'a;
+
+/// Two columns of a CSV file as pairs, at most [`MAX_CSV_POINTS`]; lines starting with `#` and
+/// blank lines are skipped. A first non-comment line that is not two numbers is a header:
+/// `columns` picks the two columns from its cells (or explains why it cannot); without a header
+/// the first two columns are read. Returns the pairs and whether there was a header.
+pub(super) fn read_pairs(
+    ctx: &Ctx<'_>,
+    field: &str,
+    file: &std::path::Path,
+    columns: &PickColumns<'_>,
+) -> Result<(Vec<[f64; 2]>, bool), SceneError> {
     use std::io::Read;
     let name = file.display().to_string();
     let fail = |problem: String, fix: &str| ctx.err(field, None, problem, "", fix);
@@ -208,7 +229,7 @@ fn read_csv(
             "give fewer points",
         ));
     }
-    let mut columns = (0usize, 1usize);
+    let mut picked = (0usize, 1usize);
     let mut header = false;
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
@@ -220,11 +241,8 @@ fn read_csv(
         let number = |i: usize| cells.get(i).is_some_and(|c| c.parse::<f64>().is_ok());
         if out.is_empty() && !header && !(number(0) && number(1)) {
             header = true;
-            // a header
-            let at = |n: &str| cells.iter().position(|c| c.eq_ignore_ascii_case(n));
-            if let (Some(s), Some(z)) = (at("station"), at("z")) {
-                columns = (s, z);
-            }
+            picked = columns(&cells)
+                .map_err(|fix| fail(format!("{name}, line {}: header `{line}`", k + 1), &fix))?;
             continue;
         }
         let get = |i: usize| -> Result<f64, SceneError> {
@@ -243,13 +261,13 @@ fn read_csv(
                 "give fewer points",
             ));
         }
-        out.push([get(columns.0)?, get(columns.1)?]);
+        out.push([get(picked.0)?, get(picked.1)?]);
     }
     if out.len() < 2 {
         return Err(fail(
-            format!("{name}: {} point(s); a polyline needs at least two", out.len()),
+            format!("{name}: {} point(s); at least two are needed", out.len()),
             "give the points as lines `x, y`",
         ));
     }
-    Ok(out)
+    Ok((out, header))
 }
