@@ -3,9 +3,9 @@
 //! into `docs/examples/valley/`.
 //!
 //! The valley side falls from about 197 m to the valley floor along +x (east), steepest (40°)
-//! at x = 250 m; the floor (about 2–5 m high, x ≈ 420–500 m) rises again into the foot of the
-//! opposite side (32° at x = 540 m, 45 m high at the east edge); a gully 6 m deep runs down the
-//! valley side along y = 150 m and fades out on the floor:
+//! at x = 250 m, to a floor 6.3 m high at x ≈ 472 m (under the gully), which rises again into
+//! the foot of the opposite side (31° at x = 540 m, 48 m high at the east edge); a gully 6 m deep
+//! runs down the valley side along y = 150 m and fades out on the floor:
 //!
 //! ```text
 //! z(x, y) = 100 (1 − tanh((x − 250)/120)) + 25 (1 + tanh((x − 540)/40))

@@ -675,7 +675,7 @@ impl Driver<'_> {
                 let p = solver.particles();
                 let sim =
                     observed::simulated(&r.ground, r.grid.column_width(), r.spacing, &p.position);
-                let last = h.runout.last().copied().unwrap_or_default();
+                let last = h.runout.last()?;
                 observed::compare(o, &sim, last.front_x, last.tail_x)
             }),
             state_hash: checkpoint::state_hash(&solver.checkpoint()),

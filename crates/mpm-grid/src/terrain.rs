@@ -39,10 +39,13 @@
 //!
 //! # Ground normal at a kink
 //! A ground node inside a segment takes that segment's unit normal (pointing up, into the
-//! material). A node on a kink takes the normalised average of the two adjacent segments' unit
-//! normals (the bisector: for a 30° slope running into a flat runout, the normal leans 15° from
-//! vertical). Both segments stay available through [`TerrainGrid::ground_segments`] for a contact
-//! model that wants to treat the two faces separately.
+//! material). A node on a kink lies on both adjacent segments' planes, and the boundary
+//! conditions hold it on both ([`TerrainGrid::boundary_normals`], where the reason is given);
+//! [`TerrainGrid::node_ground_normal`] still describes the ground there by the bisector (for a
+//! 30° slope running into a flat runout, 15° from vertical). At a convex kink (a ridge) both
+//! planes are stricter than the ground, whose admissible directions are the union of the two
+//! half-planes; the node may not follow the downhill segment at once, and the material leaves
+//! the ridge along the uphill one, an effect of order Δθ that the convex-hull guarantee needs.
 
 use serde::{Deserialize, Serialize};
 

@@ -28,10 +28,10 @@ pub struct ObservedDeposit {
 }
 
 impl ObservedDeposit {
-    /// the thickness at x: linear between the points, zero outside them.
+    /// the thickness at x: linear between the points, zero outside them (and for fewer than two).
     pub fn thickness(&self, x: f64) -> f64 {
         let p = &self.points;
-        if p.is_empty() || x < p[0][0] || x > p[p.len() - 1][0] {
+        if p.len() < 2 || x < p[0][0] || x > p[p.len() - 1][0] {
             return 0.0;
         }
         let k = p.partition_point(|q| q[0] <= x).clamp(1, p.len() - 1);
@@ -55,7 +55,7 @@ impl ObservedDeposit {
 pub struct DepositComparison {
     /// the observation's file.
     pub file: String,
-    /// the observed deposit's tail and front x (m).
+    /// the observed deposit's tail x (m).
     pub observed_tail_x: f64,
     /// the observed deposit's front x (m).
     pub observed_front_x: f64,

@@ -130,16 +130,12 @@ fn observed(
             "sort the points by x, one per x",
         ));
     }
-    if surface.get() {
-        for p in &mut points {
-            // a surface below the ground is no deposit (a survey's noise)
-            p[1] = (p[1] - ground_height(ground, p[0])).max(0.0);
+    for p in &mut points {
+        if surface.get() {
+            p[1] -= ground_height(ground, p[0]);
         }
-    } else if let Some(p) = points.iter().find(|p| p[1] < 0.0) {
-        return Err(fail(
-            format!("{name}: negative thickness {} at x = {}", p[1], p[0]),
-            "give thicknesses ≥ 0 (0 where there is no deposit)",
-        ));
+        // below the ground (a depletion zone in a DEM difference, a survey's noise): no deposit
+        p[1] = p[1].max(0.0);
     }
     if points.iter().all(|p| p[1] <= 0.0) {
         return Err(fail(

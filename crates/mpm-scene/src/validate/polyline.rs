@@ -185,7 +185,6 @@ fn dem_error(ctx: &Ctx<'_>, field: &str, e: DemError) -> SceneError {
 
 /// Reads a CSV polyline: columns `station` and `z` if the header names them (what `mpm section`
 /// writes), else the first two columns as x and y. An optional header line; `#` comments.
-/// a polyline's CSV: (x, y), or station and z under a header that names them.
 fn read_csv(
     ctx: &Ctx<'_>,
     field: &str,
@@ -250,7 +249,7 @@ pub(super) fn read_pairs(
                 || {
                     fail(
                         format!("{name}, line {}: column {} is not a finite number", k + 1, i + 1),
-                        "every data line holds numbers (x, y), or station and z under a header",
+                        "every data line holds numbers in the columns the header names (or the first two)",
                     )
                 },
             )

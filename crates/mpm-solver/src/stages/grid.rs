@@ -109,14 +109,28 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 None => Vector::ZERO,
             };
             let v_rel = sc.velocity[i] - wall;
+            let trial = v_rel + sc.acceleration[i] * dt;
             let out = apply_all(planes, sc.mass[i], v_rel, sc.acceleration[i], dt);
             // v^L = v_rel + a Δt + wall = v + a Δt: the identity still holds.
             sc.acceleration[i] = out.acceleration;
             if surface {
+                // The PIC correction removes the normal velocity of the face the node ends on
+                // (its end velocity has no part along that normal), once: the two nearly parallel
+                // planes of a kink would otherwise both correct the same velocity. A node pinned
+                // in a corner (pressed on two planes, stopped) loses its whole relative velocity.
                 // Fixed planes glue the material, as in the paper: no PIC correction there.
-                for plane in planes.iter().filter(|p| p.friction() != Friction::Fixed) {
-                    if out.impulse.dot(plane.normal()) > 0.0 {
-                        sc.held.push((b.node, plane.normal()));
+                let pushing = |p: &&Boundary| {
+                    p.friction() != Friction::Fixed && out.impulse.dot(p.normal()) > 0.0
+                };
+                let along = |p: &Boundary| out.velocity.dot(p.normal()).abs();
+                if let Some(face) =
+                    planes.iter().filter(pushing).min_by(|p, q| along(p).total_cmp(&along(q)))
+                {
+                    let n = face.normal();
+                    sc.held.push((b.node, n));
+                    let pressed = planes.iter().filter(|p| trial.dot(p.normal()) < 0.0).count();
+                    if out.velocity == Vector::ZERO && pressed >= 2 {
+                        sc.held.push((b.node, n.perp()));
                     }
                 }
             }
@@ -124,7 +138,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             // to the wall: for a node at rest on the ground it is zero (the reaction does no
             // work), for a sliding node it is the friction force times the distance slid. Their
             // sum is the kinetic energy the impulse takes from the node (midpoint rule), which is
-            // what closes the ledger; the split along the first plane's normal is indicative
+            // what closes the ledger; the split along the first held plane's normal is indicative
             // only, and either part can be negative in a step where a pressed node was moving
             // away from the wall.
             if b.partner.is_some() {
@@ -133,7 +147,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             }
             impulse += out.impulse;
             let mean_v = 0.5 * (v_rel + out.velocity);
-            let n = sc.node_planes[b.first as usize].wall.normal();
+            let n = planes[0].normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));
             constraint -= jn * vn;
             friction -= out.impulse.dot(mean_v) - jn * vn;
@@ -279,6 +293,52 @@ mod tests {
         assert!((after.0 - before.0).length() < 1e-12 * before.0.length().max(1.0));
         assert!(after.1 <= before.1, "kinetic energy grew from {} to {}", before.1, after.1);
         assert!(after.1 < 0.999 * before.1, "the correction did nothing");
+    }
+
+    /// A node at a kink of the ground carries both segments' planes, nearly parallel; the PIC
+    /// correction must remove its normal velocity once, not once per plane (which would reflect
+    /// the particles' normal velocity instead of removing it). A row of particles falls at
+    /// 1 m/s onto a ground that turns up by 2.3° at x = 0.5 m: every held node has one entry.
+    #[test]
+    fn a_kink_node_gets_one_pic_normal_correction() {
+        use mpm_grid::{KinkPolicy, TerrainGrid, TerrainGridSpec};
+        let grid = TerrainGrid::new(TerrainGridSpec {
+            profile: vec![Vector::ZERO, Vector::new(0.5, 0.0), Vector::new(1.0, 0.02)],
+            cell_width: 0.25,
+            row_height: 0.25,
+            rows: 4,
+            kink_policy: KinkPolicy::Reject,
+        })
+        .unwrap();
+        let mut particles = Particles::default();
+        for k in 0..8 {
+            let x = 0.0625 + 0.125 * f64::from(k);
+            let y = grid.ground_height(x).unwrap() + 0.0625;
+            let v = Vector::new(0.0, -1.0);
+            particles.push(NewParticle::unstressed(
+                Vector::new(x, y),
+                v,
+                0.125 * 0.125,
+                1000.0,
+                (),
+            ));
+        }
+        let config = SolverConfig {
+            boundaries: Boundaries {
+                ground: Some(Friction::Coulomb { mu: 0.0 }),
+                ..Default::default()
+            },
+            contact: Contact::Surface,
+            ..Default::default()
+        };
+        let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+        let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+        s.step().unwrap();
+        let mut nodes: Vec<u32> = s.scratch.held.iter().map(|h| h.0).collect();
+        assert!(nodes.len() >= 3, "the falling row presses on the ground: {nodes:?}");
+        let n = nodes.len();
+        nodes.dedup();
+        assert_eq!(nodes.len(), n, "a node corrected twice: {:?}", s.scratch.held);
     }
 
     fn kinetic<S>(p: &Particles<S>) -> f64 {
