@@ -317,13 +317,13 @@ fn an_instability_writes_what_was_reached_and_names_the_particle() {
 }
 
 /// The worked example of a wall anywhere: the flume with a 0.4 m check dam at x = 3 m (its crest
-/// at x = 3.107 m). Without it the front runs to about x = 4 m (the flume's summary); with it,
+/// at x = 3.107 m). Without it the front runs to about x = 3.7 m (the flume's summary); with it,
 /// the main mass stays behind the crest, and the run's energy ledger still closes to its usual
 /// size. A grain may splash over: the surge reaches the dam at about 3 m/s, enough to lift a
-/// grain v²/2g ≈ 0.46 m, above the 0.39 m crest (one of 336 does, thrown up at 2.2 m/s by the
-/// pile behind the dam at 0.85 s, and lands 0.65 m beyond it on a ballistic path); the main mass
-/// excludes such strays by construction (`RunoutMetrics::front_x`), and no more than a few may
-/// overtop.
+/// grain v²/2g ≈ 0.46 m, above the 0.39 m crest (none does at 1.5 s today, leading edge 3.086 m;
+/// one did, on a ballistic path, while a kink node got its PIC correction once per plane); the
+/// main mass excludes such strays by construction (`RunoutMetrics::front_x`), and the deposit
+/// beyond the dam must be no layer.
 #[test]
 fn the_check_dam_example_holds_the_flow_back() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/check_dam.toml");
