@@ -164,7 +164,19 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
         .chain([lo, hi].map(|x| (x, ground_height(&r.ground, x))))
         .collect();
     ground_sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let surface = summary::surface(positions, &r.ground, r.spacing, column);
+    // the free surface, down to the ground across empty columns (not a line bridging a gap)
+    let mut surface: Vec<(f64, f64)> = Vec::new();
+    let mut last_x = f64::NEG_INFINITY;
+    for (x, top, _) in summary::surface(positions, &r.ground, r.spacing, column) {
+        if x - last_x > 1.5 * column && last_x.is_finite() {
+            let (a, b) = (last_x + column, x - column);
+            surface.push((a, ground_height(&r.ground, a)));
+            surface.extend(r.ground.iter().filter(|g| g.x > a && g.x < b).map(|g| (g.x, g.y)));
+            surface.push((b, ground_height(&r.ground, b)));
+        }
+        surface.push((x, top));
+        last_x = x;
+    }
     let title = format!("Deposit at t = {:.3} s", time);
     plots::chart(
         &plot_dir.join("deposit.png"),
@@ -188,12 +200,7 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
                 style: Style::Points,
                 color: 0,
             },
-            Series {
-                name: "free surface".into(),
-                points: surface.iter().map(|s| (s.0, s.1)).collect(),
-                style: Style::Line,
-                color: 1,
-            },
+            Series { name: "free surface".into(), points: surface, style: Style::Line, color: 1 },
             Series { name: "ground".into(), points: ground_sorted, style: Style::Thick, color: 5 },
         ]
         .into_iter()

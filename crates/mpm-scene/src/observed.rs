@@ -16,8 +16,6 @@
 use mpm_solver::Vector;
 use serde::{Deserialize, Serialize};
 
-use crate::scene::ground_height;
-
 /// An observed deposit: thickness above the ground (m, vertical) at increasing x (m).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObservedDeposit {
@@ -73,9 +71,10 @@ pub struct DepositComparison {
     pub stations: usize,
 }
 
-/// The simulated deposit's vertical thickness per station of width `column` from `x0` over the
-/// ground: (station centre x, thickness), the top of the column's highest particle (centre plus
-/// half `spacing`) above the ground under that particle, zero for an empty column.
+/// The simulated deposit's vertical thickness per station of width `column` from the ground's
+/// first x: (station centre x, thickness), the free surface's height above the ground there
+/// ([`crate::summary::surface`]: the top of the column's highest particle, centre plus half
+/// `spacing`, above the ground under that particle), zero for an empty column.
 pub fn simulated(
     ground: &[Vector],
     column: f64,
@@ -85,15 +84,15 @@ pub fn simulated(
     let (Some(first), Some(last)) = (ground.first(), ground.last()) else { return Vec::new() };
     let x0 = first.x;
     let n = ((last.x - x0) / column).round().max(1.0) as usize;
-    let mut top = vec![0.0f64; n];
-    for p in positions.iter().filter(|p| p.is_finite()) {
-        let k = ((p.x - x0) / column).floor();
+    let mut thickness = vec![0.0f64; n];
+    // the free surface's columns are the stations that hold particles
+    for (x, top, g) in crate::summary::surface(positions, ground, spacing, column) {
+        let k = ((x - x0) / column).floor();
         if k >= 0.0 && k < n as f64 {
-            let h = p.y + 0.5 * spacing - ground_height(ground, p.x);
-            top[k as usize] = top[k as usize].max(h);
+            thickness[k as usize] = top - g;
         }
     }
-    top.into_iter().enumerate().map(|(k, h)| (x0 + (k as f64 + 0.5) * column, h)).collect()
+    thickness.into_iter().enumerate().map(|(k, h)| (x0 + (k as f64 + 0.5) * column, h)).collect()
 }
 
 /// compares the `simulated` deposit (per station, see [`simulated`]) and its main mass's
