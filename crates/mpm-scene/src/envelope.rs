@@ -124,7 +124,7 @@ impl Envelope {
     }
 
     /// the station whose column holds x.
-    fn index(&self, x: f64) -> Option<usize> {
+    pub(crate) fn index(&self, x: f64) -> Option<usize> {
         let k = ((x - self.x0) / self.column).floor();
         (k >= 0.0 && k < self.stations.len() as f64).then_some(k as usize)
     }

@@ -71,8 +71,9 @@ pub struct DepositComparison {
     pub stations: usize,
 }
 
-/// The simulated deposit's vertical thickness per station of width `column` from the ground's
-/// first x: (station centre x, thickness), the free surface's height above the ground there
+/// The simulated deposit's vertical thickness at the envelopes' stations (columns of width
+/// `column` from the ground's first x, [`crate::envelope::Envelope::new`]): (station centre x,
+/// thickness), the free surface's height above the ground there
 /// ([`crate::summary::surface`]: the top of the column's highest particle, centre plus half
 /// `spacing`, above the ground under that particle), zero for an empty column.
 pub fn simulated(
@@ -81,18 +82,15 @@ pub fn simulated(
     spacing: f64,
     positions: &[Vector],
 ) -> Vec<(f64, f64)> {
-    let (Some(first), Some(last)) = (ground.first(), ground.last()) else { return Vec::new() };
-    let x0 = first.x;
-    let n = ((last.x - x0) / column).round().max(1.0) as usize;
-    let mut thickness = vec![0.0f64; n];
-    // the free surface's columns are the stations that hold particles
+    // the envelopes' stations; the free surface's columns are those that hold particles
+    let stations = crate::envelope::Envelope::new(ground, column);
+    let mut thickness = vec![0.0f64; stations.stations.len()];
     for (x, top, g) in crate::summary::surface(positions, ground, spacing, column) {
-        let k = ((x - x0) / column).floor();
-        if k >= 0.0 && k < n as f64 {
-            thickness[k as usize] = top - g;
+        if let Some(k) = stations.index(x) {
+            thickness[k] = top - g;
         }
     }
-    thickness.into_iter().enumerate().map(|(k, h)| (x0 + (k as f64 + 0.5) * column, h)).collect()
+    stations.stations.iter().zip(thickness).map(|(s, h)| (s.x, h)).collect()
 }
 
 /// compares the `simulated` deposit (per station, see [`simulated`]) and its main mass's
