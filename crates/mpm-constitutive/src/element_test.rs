@@ -356,7 +356,7 @@ fn solve_block(t: &Tangent, ctrl: &[usize], rhs: impl Fn(usize) -> f64) -> Optio
     let tiny = norm * 1e-13;
     let lu = a.partial_piv_lu();
     let u = lu.U();
-    if (0..n).any(|k| !(u[(k, k)].abs() > tiny) || !u[(k, k)].is_finite()) {
+    if (0..n).any(|k| u[(k, k)].abs() <= tiny || !u[(k, k)].is_finite()) {
         return None;
     }
     let y = lu.solve(faer::Mat::<f64>::from_fn(n, 1, |r, _| rhs(ctrl[r])));
