@@ -90,6 +90,9 @@ fn setup<E: std::fmt::Display>(e: E) -> CaseError {
 /// particle size of `ppc` particles per cell.
 pub use mpm_grid::RegularShape as ShapeKind;
 
+/// The grid's mass matrix: lumped (the paper's) or consistent.
+pub use mpm_solver::MassMatrix;
+
 /// The numerical choices of a run: resolution, scheme, shape functions and time step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Discretisation {
@@ -103,12 +106,21 @@ pub struct Discretisation {
     pub shape: ShapeKind,
     /// Courant number of the time step.
     pub courant: f64,
+    /// Lumped (the paper's) or consistent mass matrix.
+    pub mass: MassMatrix,
 }
 
 impl Discretisation {
     /// The paper's set-up at cell size `cell`: 2 × 2 particles per cell, USAVG, bilinear, C = 0.1.
     pub fn paper(cell: f64) -> Self {
-        Self { cell, ppc: 2, scheme: Scheme::Usavg, shape: ShapeKind::Bilinear, courant: 0.1 }
+        Self {
+            cell,
+            ppc: 2,
+            scheme: Scheme::Usavg,
+            shape: ShapeKind::Bilinear,
+            courant: 0.1,
+            mass: MassMatrix::Lumped,
+        }
     }
 }
 
@@ -249,6 +261,7 @@ pub fn sliding_horizontal(d: &Discretisation) -> Result<Sliding, CaseError> {
     let config = SolverConfig {
         scheme: d.scheme,
         time_step: TimeStep::Courant(d.courant),
+        mass: d.mass,
         boundaries: Boundaries { ground: Some(Friction::Coulomb { mu: MU }), ..Default::default() },
         ..Default::default()
     };
@@ -370,6 +383,7 @@ pub fn sliding_inclined(
     let config = SolverConfig {
         scheme: d.scheme,
         time_step: TimeStep::Courant(d.courant),
+        mass: d.mass,
         boundaries: Boundaries { ground: Some(Friction::Coulomb { mu: MU }), ..Default::default() },
         gravity_ramp,
         ..Default::default()
@@ -566,6 +580,7 @@ fn bar_on<S: ShapeFunctions<N>, const N: usize>(
     let config = SolverConfig {
         scheme: d.scheme,
         time_step: TimeStep::Courant(d.courant),
+        mass: d.mass,
         gravity: Vector::ZERO,
         boundaries: Boundaries { left_wall: Some(Friction::Fixed), ..Default::default() },
         ..Default::default()

@@ -128,6 +128,7 @@ fn variant(e: &RowError) -> &'static str {
         SolverError::CourantExceeded { .. } => "CourantExceeded",
         SolverError::StepTooLong { .. } => "StepTooLong",
         SolverError::Constitutive { .. } => "Constitutive",
+        SolverError::MassSolve { .. } => "MassSolve",
     }
 }
 

@@ -21,7 +21,8 @@ use anyhow::Result;
 use mpm_solver::Scheme;
 use mpm_tests::abe2005::{eq21_distance, eq22_travel};
 use mpm_tests::{
-    CaseError, Cost, Discretisation, ShapeKind, sliding_horizontal, sliding_inclined, vibrating_bar,
+    CaseError, Cost, Discretisation, MassMatrix, ShapeKind, sliding_horizontal, sliding_inclined,
+    vibrating_bar,
 };
 
 use crate::plot::{Mark, Panel, Series, figure};
@@ -146,6 +147,7 @@ fn plans(quick: bool) -> Vec<Plan> {
                 scheme: Scheme::Usavg,
                 shape: ShapeKind::Bilinear,
                 courant: 0.1,
+                mass: MassMatrix::Lumped,
             },
             cells: ladder(&[1.0, 0.5, 0.25, 0.125], 3),
             shapes: ShapeKind::ALL.to_vec(),

@@ -18,7 +18,7 @@ use mpm_constitutive::{
     ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
     SymTensor,
 };
-use mpm_solver::{Contact, Scheme};
+use mpm_solver::{Contact, MassMatrix, Scheme};
 use mpm_tests::abe2005::{eq21_displacement, eq21_distance, eq21_stop_time, eq22_travel};
 use mpm_tests::{
     Discretisation, FreeFall, ShapeKind, bar, free_fall, sliding_horizontal, sliding_inclined,
@@ -382,7 +382,14 @@ pub fn run(quick: bool) -> Result<bool> {
     }
     for (scheme, shape, cell, courant) in bars {
         let case = format!("vibrating bar {} {} {cell} m C {courant}", scheme.name(), shape.name());
-        match vibrating_bar(&Discretisation { cell, ppc: 2, scheme, shape, courant }) {
+        match vibrating_bar(&Discretisation {
+            cell,
+            ppc: 2,
+            scheme,
+            shape,
+            courant,
+            mass: MassMatrix::Lumped,
+        }) {
             Ok(r) => {
                 rows.rel(
                     &case,

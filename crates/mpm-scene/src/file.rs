@@ -15,7 +15,7 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-pub use mpm_solver::{Contact, Scheme, Transfer};
+pub use mpm_solver::{Contact, MassMatrix, Scheme, Transfer};
 
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -385,6 +385,10 @@ pub struct SolverSpec {
     /// or `"node"` (the paper's: always).
     #[serde(default)]
     pub contact: Option<Contact>,
+    /// the grid's mass matrix: `"lumped"` (default, the paper's) or `"consistent"` (less
+    /// numerical dissipation, a linear solve per transfer).
+    #[serde(default)]
+    pub mass: Option<MassMatrix>,
     /// energy alarm: largest admissible |energy residual| as a fraction of the run's energy scale
     /// (`mpm_solver::EnergyCheck`), default 0.2.
     #[serde(default)]

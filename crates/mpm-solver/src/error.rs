@@ -128,6 +128,23 @@ pub enum SolverError {
         /// the fixed time step
         dt: f64,
     },
+    /// A consistent-mass solve (`stages/mass.rs`) did not converge: the matrix is not the
+    /// symmetric positive definite one it should be, or its right-hand side is not finite.
+    #[error(
+        "step {step}: the consistent-mass solve for the {solve} did not converge after \
+         {iterations} iterations (relative residual {relative_residual:e}); a non-finite force or \
+         velocity, or use mass = \"lumped\""
+    )]
+    MassSolve {
+        /// step at which it happened
+        step: u64,
+        /// which system
+        solve: &'static str,
+        /// conjugate-gradient iterations taken
+        iterations: usize,
+        /// ‖r‖ / ‖b‖ in the lumped matrix's inverse norm
+        relative_residual: f64,
+    },
     /// The constitutive update refused its input.
     #[error("step {step}: particle {particle} at ({x}, {y}): {source}", x = position.x, y = position.y)]
     Constitutive {

@@ -55,7 +55,8 @@ pub mod solver;
 mod stages;
 
 pub use config::{
-    Boundaries, Contact, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer,
+    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep,
+    Transfer,
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};

@@ -28,6 +28,7 @@ use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
+use crate::stages::mass::{ConsistentScratch, Solve};
 use crate::stages::timestep::{Fastest, signal_cap};
 
 /// What one step did.
@@ -275,6 +276,10 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) held: Vec<(u32, Vector)>,
     /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
     pub(crate) corrections: Vec<(u32, Vector)>,
+    /// Counts rebuilds of the active set (tables keyed on the set's numbering compare it).
+    pub(crate) active_generation: u64,
+    /// The consistent mass matrix and its solver's vectors (`stages/mass.rs`); empty when lumped.
+    pub(crate) consistent: ConsistentScratch,
     /// How often `locate` kept everything, kept the active set, rebuilt it (tests only).
     #[cfg(test)]
     pub(crate) paths: [usize; 3],
@@ -314,6 +319,8 @@ impl<F, const N: usize> Scratch<F, N> {
             saved: Vec::new(),
             held: Vec::new(),
             corrections: Vec::new(),
+            active_generation: 0,
+            consistent: ConsistentScratch::new(),
             #[cfg(test)]
             paths: [0; 3],
         }
@@ -347,6 +354,7 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.node_planes.capacity() * size_of::<NodePlane>()
             + self.plane_buf.capacity() * size_of::<Boundary>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
+            + self.consistent.heap_bytes()
     }
 }
 
@@ -668,7 +676,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let branches = match self.config.scheme {
             Scheme::Usl => {
                 self.p2g_all(dt);
-                self.grid_solve(dt);
+                self.consistent_transfer()?;
+                self.grid_solve(dt)?;
                 self.g2p(dt)?;
                 self.advance_velocity(dt);
                 self.wrap_periodic(dt);
@@ -676,32 +685,35 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             }
             Scheme::Musl => {
                 self.p2g_all(dt);
-                self.grid_solve(dt);
+                self.consistent_transfer()?;
+                self.grid_solve(dt)?;
                 self.g2p(dt)?;
-                self.remap_velocity(dt);
+                self.remap_velocity(dt)?;
                 self.wrap_periodic(dt);
                 self.update_stress(dt, true)?
             }
             Scheme::Usf => {
                 self.p2g_mass_velocity();
+                self.consistent_transfer()?;
                 self.constrain_velocity();
                 let counts = self.update_stress(dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
-                self.grid_solve(dt);
+                self.grid_solve(dt)?;
                 self.g2p(dt)?;
                 self.wrap_periodic(dt);
                 counts
             }
             Scheme::Usavg => {
                 self.p2g_mass_velocity();
+                self.consistent_transfer()?;
                 self.constrain_velocity();
                 self.update_stress(0.5 * dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
-                self.grid_solve(dt);
+                self.grid_solve(dt)?;
                 self.g2p(dt)?;
-                self.remap_velocity(dt);
+                self.remap_velocity(dt)?;
                 self.wrap_periodic(dt);
                 self.update_stress(0.5 * dt, true)?
             }
@@ -717,6 +729,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.last =
             StepReport { step: self.step, time: self.time, dt, courant, active_nodes, branches };
         Ok(self.last)
+    }
+
+    /// with the consistent mass matrix, assembles it from the step's particle-to-grid stencils
+    /// and projects the nodal velocities (`stages/mass.rs`); nothing under the lumped matrix.
+    fn consistent_transfer(&mut self) -> Result<(), SolverError> {
+        self.assemble_mass_matrix();
+        self.project_velocity(Solve::Velocity)
+    }
+
+    /// conjugate-gradient iterations of the consistent-mass solves so far in this process (0
+    /// with the lumped matrix): their cost, for studies.
+    pub fn mass_solve_iterations(&self) -> u64 {
+        self.scratch.consistent.iterations
     }
 
     /// Periodic sides ([`crate::Periodic`]): a particle that has left through one side enters

@@ -4,16 +4,26 @@
 //! library ([`mpm_tests::vibrating_bar`]), shared with `cargo xtask verify`.
 
 use mpm_solver::Scheme;
-use mpm_tests::{Discretisation, ShapeKind, bar, vibrating_bar as run_bar};
+use mpm_tests::{Discretisation, MassMatrix, ShapeKind, bar, vibrating_bar as run_bar};
 
 /// (measured period / exact period, largest |E(t) − E0|/E0) over five periods, 2 × 2 particles
 /// per cell.
 fn vibrating_bar(scheme: Scheme, cell: f64, courant: f64, smooth: bool) -> (f64, f64) {
+    vibrating_bar_with(scheme, cell, courant, smooth, MassMatrix::Lumped)
+}
+
+fn vibrating_bar_with(
+    scheme: Scheme,
+    cell: f64,
+    courant: f64,
+    smooth: bool,
+    mass: MassMatrix,
+) -> (f64, f64) {
     let shape = if smooth { ShapeKind::BSpline } else { ShapeKind::Bilinear };
-    let d = Discretisation { cell, ppc: 2, scheme, shape, courant };
+    let d = Discretisation { cell, ppc: 2, scheme, shape, courant, mass };
     let r = run_bar(&d).unwrap();
     eprintln!(
-        "vibrating bar {} {} cell {cell} C {courant}: period {:.4} s (exact {:.4}), worst |ΔE|/E0 {:.3e}",
+        "vibrating bar {} {} {mass:?} cell {cell} C {courant}: period {:.4} s (exact {:.4}), worst |ΔE|/E0 {:.3e}",
         scheme.name(),
         shape.name(),
         r.period_ratio * bar::period(),
@@ -54,4 +64,18 @@ fn bardenhagen2002_vibrating_bar_bspline_refined() {
         assert!((ratio - 1.0).abs() < 0.01, "{}: period ratio {ratio}", scheme.name());
         assert!(energy < 0.01, "{}: energy error {energy}", scheme.name());
     }
+}
+
+/// The consistent mass matrix (`mpm_solver::MassMatrix::Consistent`) removes the lumped
+/// transfer's smoothing: on the same bar, grid and time step its period and energy errors are
+/// both below the lumped matrix's (measured: period 0.013 % against 0.059 %, energy 0.39 %
+/// against 0.64 %, MUSL). The literature's claim (Burgess, Sulsky & Brackbill 1992; Love &
+/// Sulsky 2006), asserted as an inequality with the 1 % bounds kept.
+#[test]
+fn consistent_mass_vibrating_bar_beats_lumped() {
+    let lumped = vibrating_bar_with(Scheme::Musl, 1.0, 0.05, false, MassMatrix::Lumped);
+    let consistent = vibrating_bar_with(Scheme::Musl, 1.0, 0.05, false, MassMatrix::Consistent);
+    assert!((consistent.0 - 1.0).abs() < (lumped.0 - 1.0).abs(), "{consistent:?} vs {lumped:?}");
+    assert!(consistent.1 < lumped.1, "energy {consistent:?} vs {lumped:?}");
+    assert!(consistent.1 < 0.01 && (consistent.0 - 1.0).abs() < 0.01, "{consistent:?}");
 }

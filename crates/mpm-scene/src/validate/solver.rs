@@ -2,7 +2,8 @@
 
 use mpm_contact::Wall;
 use mpm_solver::{
-    Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
+    Boundaries, MassMatrix, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep,
+    Vector, stable_dt,
 };
 
 use super::{Ctx, finite_pos, num, pair};
@@ -158,7 +159,26 @@ pub(super) fn config(
         gravity_ramp: settings.gravity_ramp,
         transfer: s.transfer.unwrap_or_default(),
         contact: s.contact.unwrap_or_default(),
+        mass: s.mass.unwrap_or_default(),
     };
+    if config.mass == MassMatrix::Consistent && config.transfer == mpm_solver::Transfer::Apic {
+        return Err(ctx.err(
+            "solver.mass",
+            Some("\"consistent\"".into()),
+            "the consistent mass matrix with the APIC transfer is unstable (measured)",
+            "mass = \"consistent\" with transfer = \"flip\"",
+            "remove `mass` (lumped) or `transfer = \"apic\"`",
+        ));
+    }
+    if config.mass == MassMatrix::Consistent && config.periodic.is_some() {
+        return Err(ctx.err(
+            "solver.mass",
+            Some("\"consistent\"".into()),
+            "the consistent mass matrix does not fold a periodic pair of columns yet",
+            "mass = \"lumped\" with periodic sides",
+            "remove `mass` (lumped) or the periodic sides",
+        ));
+    }
     config.validate().map_err(|e| solver_error(ctx, e))?;
     Ok(config)
 }

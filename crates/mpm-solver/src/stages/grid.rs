@@ -18,6 +18,7 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use crate::config::Contact;
+use crate::error::SolverError;
 use crate::math::{Real, Vector};
 use crate::solver::{NodePlane, Solver};
 
@@ -70,7 +71,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// accelerations and end-of-step velocities of every active node, boundary nodes included.
-    pub(crate) fn grid_solve(&mut self, dt: Real) {
+    ///
+    /// With the consistent mass matrix the lumped a_i = f_i / m_i start its solve M a = f
+    /// (`stages/mass.rs`), whose failure is the only error.
+    pub(crate) fn grid_solve(&mut self, dt: Real) -> Result<(), SolverError> {
         let sc = &mut self.scratch;
         let small = self.small_mass;
         let g = self.config.gravity_at(self.time + 0.5 * dt);
@@ -81,16 +85,20 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .for_each(|(a, (&f, &m))| {
                 *a = if m > small { f / m } else { g };
             });
+        self.solve_acceleration()?;
+        let sc = &mut self.scratch;
 
         let (mut friction, mut constraint, mut impulse) = (0.0, 0.0, Vector::ZERO);
         let surface = self.config.contact == Contact::Surface;
         sc.held.clear();
+        sc.consistent.constrained.clear();
         for b in &sc.boundary {
             let i = b.node as usize;
             let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
             if planes.is_empty() {
                 continue;
             }
+            sc.consistent.constrained.push(b.node);
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
             let wall = match b.mirror {
@@ -155,6 +163,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.friction += friction;
         self.dissipation.constraint += constraint;
         self.dissipation.impulse += impulse;
+        self.resolve_constrained()
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.

@@ -113,6 +113,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             sc.paths[2] += 1;
         }
         sc.active.rebuild(sc.first_node.iter().flat_map(|&f| stencil_nodes::<N>(f)));
+        sc.active_generation += 1;
         let complete = number_stencils(sc, chunk);
         debug_assert!(complete, "every stencil node was inserted by the rebuild");
         index_blocks(sc);

@@ -3,6 +3,7 @@
 mod g2p;
 mod grid;
 mod locate;
+pub(crate) mod mass;
 pub(crate) mod p2g;
 mod stress;
 pub(crate) mod timestep;

@@ -22,8 +22,10 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use crate::config::Transfer;
+use crate::error::SolverError;
 use crate::math::{Real, Vector};
 use crate::solver::{Scratch, Solver};
+use crate::stages::mass::Solve;
 
 /// nodes along each side of a block's patch for stencils of `n` nodes: the block's 8 and the
 /// w − 1 beyond its upper and right edges that stencils anchored in it reach.
@@ -46,14 +48,18 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
     /// old stencils, then the boundary velocity constraint (eq 18). m_i is the step's P2G mass:
     /// the same sum over the same stencils.
-    pub(crate) fn remap_velocity(&mut self, dt: Real) {
+    /// With the consistent mass matrix the remapped velocity is its L2 projection
+    /// (`stages/mass.rs`), whose failure is the only error.
+    pub(crate) fn remap_velocity(&mut self, dt: Real) -> Result<(), SolverError> {
         // The stencils are the start-of-step ones, so the affine term must use the start-of-step
         // positions too: x_p − Δt v_p, exact under APIC (whose G2P moves x_p by Δt v_p).
         match self.config.transfer {
             Transfer::Flip => self.scatter::<false, true, false, false>(dt, Vector::ZERO),
             Transfer::Apic => self.scatter::<false, true, false, true>(dt, Vector::ZERO),
         }
+        self.project_velocity(Solve::Remap)?;
         self.constrain_velocity();
+        Ok(())
     }
 
     /// mass, velocity and force in one pass (USL and MUSL, whose force uses the stress of the
@@ -363,7 +369,7 @@ mod tests {
             assert_eq!(bits(&s.scratch.velocity), bits(&all.1), "{transfer:?} split velocity");
             assert_eq!(bits(&s.scratch.force), bits(&all.2), "{transfer:?} split force");
             s.scratch.velocity.fill(Vector::NAN);
-            s.remap_velocity(0.0);
+            s.remap_velocity(0.0).unwrap();
             assert_eq!(bits(&s.scratch.velocity), bits(&all.1), "{transfer:?} remap");
         }
     }

@@ -318,7 +318,7 @@ mod tests {
         let dt = 1e-3;
         s.locate().unwrap();
         s.p2g_all(dt);
-        s.grid_solve(dt);
+        s.grid_solve(dt).unwrap();
         s.g2p(dt).unwrap();
         s.advance_velocity(dt);
         let sc = &s.scratch;
@@ -336,10 +336,15 @@ mod tests {
     /// A sand block of 1 600 particles (8 chunks of 200) thrown spinning across a frictional
     /// floor between walls: particles cross cells, yield and touch the floor. Returns the bits of
     /// every position and stress after 300 steps, run in a pool of `threads`.
-    fn thrown_sand(threads: usize, scheme: crate::Scheme, transfer: crate::Transfer) -> Vec<u64> {
+    fn thrown_sand(
+        threads: usize,
+        scheme: crate::Scheme,
+        transfer: crate::Transfer,
+        mass: crate::MassMatrix,
+    ) -> Vec<u64> {
         use mpm_constitutive::{DruckerPrager, DruckerPragerParams};
         let sand = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND).unwrap();
-        thrown(threads, scheme, transfer, sand)
+        thrown(threads, scheme, transfer, mass, sand)
     }
 
     /// [`thrown_sand`] with the material `sand`.
@@ -347,6 +352,7 @@ mod tests {
         threads: usize,
         scheme: crate::Scheme,
         transfer: crate::Transfer,
+        mass: crate::MassMatrix,
         sand: M,
     ) -> Vec<u64> {
         use mpm_contact::Friction;
@@ -380,6 +386,7 @@ mod tests {
                 right_wall: Some(Friction::Coulomb { mu: 0.0 }),
             },
             objective_stress: true,
+            mass,
             ..Default::default()
         };
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -410,15 +417,19 @@ mod tests {
     /// computed ahead, the USL + APIC shortcut and the size-dependent chunk length all in play.
     #[test]
     fn steps_are_bit_identical_for_one_and_two_threads_over_many_chunks() {
-        use crate::{Scheme, Transfer};
-        for (scheme, transfer) in [
-            (Scheme::Musl, Transfer::Flip),
-            (Scheme::Usavg, Transfer::Flip),
-            (Scheme::Usl, Transfer::Apic),
+        use crate::{MassMatrix, Scheme, Transfer};
+        for (scheme, transfer, mass) in [
+            (Scheme::Musl, Transfer::Flip, MassMatrix::Lumped),
+            (Scheme::Usavg, Transfer::Flip, MassMatrix::Lumped),
+            (Scheme::Usl, Transfer::Apic, MassMatrix::Lumped),
+            // the consistent solve's chunked sums and its serial assembly
+            (Scheme::Usavg, Transfer::Flip, MassMatrix::Consistent),
+            (Scheme::Usl, Transfer::Flip, MassMatrix::Consistent),
+            (Scheme::Musl, Transfer::Flip, MassMatrix::Consistent),
         ] {
-            let one = thrown_sand(1, scheme, transfer);
+            let one = thrown_sand(1, scheme, transfer, mass);
             assert!(one.iter().all(|b| f64::from_bits(*b).is_finite()));
-            assert_eq!(one, thrown_sand(2, scheme, transfer), "{scheme:?} {transfer:?}");
+            assert_eq!(one, thrown_sand(2, scheme, transfer, mass), "{scheme:?} {transfer:?}");
         }
     }
 
@@ -431,10 +442,11 @@ mod tests {
         use mpm_constitutive::{DruckerPrager, DruckerPragerParams};
         let mixed = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND).unwrap();
         let perfect = mixed.without_hardening().unwrap();
+        use crate::MassMatrix;
         for (scheme, transfer) in [(Scheme::Usavg, Transfer::Flip), (Scheme::Usl, Transfer::Apic)] {
             assert_eq!(
-                thrown(1, scheme, transfer, mixed.clone()),
-                thrown(1, scheme, transfer, perfect.clone()),
+                thrown(1, scheme, transfer, MassMatrix::Lumped, mixed.clone()),
+                thrown(1, scheme, transfer, MassMatrix::Lumped, perfect.clone()),
                 "{scheme:?} {transfer:?}"
             );
         }
