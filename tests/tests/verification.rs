@@ -4,6 +4,7 @@
 mod verification {
     pub mod abe2005;
     pub mod bardenhagen2002;
+    pub mod consistent_mass;
     pub mod floor;
     pub mod guards;
     pub mod kinks;

@@ -390,83 +390,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 #[cfg(test)]
 mod tests {
-    use mpm_constitutive::{LinearElastic, PlaneTensor};
-    use mpm_grid::{Bilinear, QuadraticBSpline, RegularGrid, ShapeFunctions};
-
     use super::band_place;
-    use crate::particles::{NewParticle, Particles};
-    use crate::{MassMatrix, Scheme, Solver, SolverConfig, Vector};
-
-    /// a 1 m × 0.75 m elastic block, 2 × 2 particles per 0.25 m cell, in free flight with a
-    /// swirling velocity and a non-uniform stress, so that every node's force and velocity
-    /// differ and the consistent solve has real work.
-    fn swirling<S: ShapeFunctions<N>, const N: usize>(
-        shape: S,
-        scheme: Scheme,
-        mass: MassMatrix,
-    ) -> Solver<LinearElastic, S, N> {
-        let mut particles = Particles::default();
-        for j in 0..6 {
-            for i in 0..8 {
-                let x = Vector::new(1.0625 + 0.125 * f64::from(i), 1.0625 + 0.125 * f64::from(j));
-                let v = Vector::new((3.0 * x.y).sin(), (2.0 * x.x).cos());
-                let mut p = NewParticle::unstressed(x, v, 0.125 * 0.125, 1500.0 + 100.0 * x.x, ());
-                p.stress = PlaneTensor::new(-1e3 * x.x, -2e3 * x.y, -5e2, 3e2 * x.x * x.y);
-                particles.push(p);
-            }
-        }
-        let config = SolverConfig { scheme, mass, small_mass_ratio: 0.0, ..Default::default() };
-        let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
-        Solver::new(shape, vec![material], particles, config).unwrap()
-    }
-
-    /// Every solved row sums to the node's lumped mass and the matrix is symmetric (module
-    /// docs), so Σ m_i a_i = Σ f_i: with no boundary the particles' momentum grows by exactly
-    /// M g t. Checked over 40 steps of every scheme, bilinear and B-spline, to 1e-12 of the
-    /// momentum's scale (the solver's 1e-13 tolerance plus rounding of a few hundred nodes).
-    #[test]
-    fn consistent_mass_conserves_momentum() {
-        let grid = || RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [16, 16]).unwrap();
-        fn check<S: ShapeFunctions<N>, const N: usize>(mut s: Solver<LinearElastic, S, N>) {
-            let p0 = s.particles().momentum();
-            let total = s.particles().total_mass();
-            for _ in 0..40 {
-                s.step().unwrap();
-            }
-            let expected = p0 + total * s.config().gravity * s.time();
-            let scale = p0.length() + (total * s.config().gravity * s.time()).length();
-            let error = (s.particles().momentum() - expected).length();
-            assert!(error < 1e-12 * scale, "{:?}: momentum off by {error:e}", s.config().scheme);
-            assert!(s.mass_solve_iterations() > 0, "the consistent solve never ran");
-        }
-        for scheme in Scheme::ALL {
-            check(swirling(Bilinear(grid()), scheme, MassMatrix::Consistent));
-            check(swirling(QuadraticBSpline::new(grid()), scheme, MassMatrix::Consistent));
-        }
-    }
-
-    /// The consistent solve is not the lumped division in disguise: the same step gives other
-    /// particle velocities (by more than rounding), and the lumped matrix runs no solve.
-    #[test]
-    fn consistent_and_lumped_steps_differ() {
-        let grid = || RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [16, 16]).unwrap();
-        let mut lumped = swirling(Bilinear(grid()), Scheme::Musl, MassMatrix::Lumped);
-        let mut consistent = swirling(Bilinear(grid()), Scheme::Musl, MassMatrix::Consistent);
-        lumped.step().unwrap();
-        consistent.step().unwrap();
-        assert_eq!(lumped.mass_solve_iterations(), 0);
-        let gap = lumped
-            .particles()
-            .velocity
-            .iter()
-            .zip(&consistent.particles().velocity)
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f64::max);
-        assert!(gap > 1e-6, "largest velocity difference {gap:e}");
-    }
 
     /// the band place of (k, l) and of (l, k) mirror each other about the centre (the matrix is
-    /// symmetric), and a node's own entry is the centre.
+    /// symmetric), and a node's own entry is the centre. The momentum balance, the thread
+    /// independence and the vibrating bar are tested at the workspace level
+    /// (`tests/tests/verification/consistent_mass.rs`, `stages/stress.rs`).
     #[test]
     fn band_places_mirror_about_the_centre() {
         for w in [2, 3] {
