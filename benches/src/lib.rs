@@ -8,7 +8,9 @@ use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
 use mpm_contact::Friction;
 use mpm_grid::{Bilinear, RegularGrid};
 use mpm_solver::generate::{Shape, fill};
-use mpm_solver::{Boundaries, NewParticle, Particles, Scheme, Solver, SolverConfig, Vector};
+use mpm_solver::{
+    Boundaries, MassMatrix, NewParticle, Particles, Scheme, Solver, SolverConfig, Vector,
+};
 
 /// A 1 m square body of about `n` particles (2 × 2 per cell, ρ = 1600 kg/m³) resting on a
 /// frictional floor (μ = 0.5) between frictionless walls 0.5 m from its sides, MUSL with bilinear
@@ -19,6 +21,15 @@ use mpm_solver::{Boundaries, NewParticle, Particles, Scheme, Solver, SolverConfi
 pub fn square_on_floor<M: ConstitutiveModel>(
     n: usize,
     model: M,
+) -> Solver<M, Bilinear<RegularGrid>, 4> {
+    square_on_floor_with(n, model, MassMatrix::Lumped)
+}
+
+/// [`square_on_floor`] with the mass matrix `mass`.
+pub fn square_on_floor_with<M: ConstitutiveModel>(
+    n: usize,
+    model: M,
+    mass: MassMatrix,
 ) -> Solver<M, Bilinear<RegularGrid>, 4> {
     let cells_side = (((n / 4) as f64).sqrt().round() as usize).max(1);
     let cell = 1.0 / cells_side as f64;
@@ -50,6 +61,7 @@ pub fn square_on_floor<M: ConstitutiveModel>(
             right_wall: Some(Friction::Coulomb { mu: 0.0 }),
         },
         objective_stress: M::IS_PLASTIC,
+        mass,
         ..Default::default()
     };
     Solver::new(Bilinear(grid), vec![model], particles, config).expect("a valid scene")
