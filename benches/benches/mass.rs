@@ -52,7 +52,8 @@ fn mass(c: &mut Criterion) {
     group.sample_size(10);
     let elastic = LinearElastic::from_young_poisson(2e6, 0.3).unwrap();
     for n in [1_000usize, 10_000, 100_000] {
-        for (name, kind) in [("lumped", MassMatrix::Lumped), ("consistent", MassMatrix::Consistent)] {
+        for (name, kind) in [("lumped", MassMatrix::Lumped), ("consistent", MassMatrix::Consistent)]
+        {
             let mut solver = mpm_benches::square_on_floor_with(n, elastic.clone(), kind);
             for _ in 0..3 {
                 solver.step().unwrap();

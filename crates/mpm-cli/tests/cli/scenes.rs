@@ -103,3 +103,18 @@ fn an_observed_deposit_is_read_checked_and_explained() {
     assert!(err.contains("o.csv") && err.contains("cannot read"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `[solver] mass`: the consistent matrix is accepted with FLIP and refused, at its line, with
+/// APIC (unstable, `stages/mass.rs`).
+#[test]
+fn the_consistent_mass_matrix_is_accepted_with_flip_and_refused_with_apic() {
+    let base = embedded_scene("free_fall").unwrap();
+    assert!(base.contains("[solver]\n"), "the scene has a [solver] table");
+    let with = |extra: &str| base.replace("[solver]\n", &format!("[solver]\n{extra}"));
+    let scene = load_scene_str(&with("mass = \"consistent\"\n"), "consistent.toml").unwrap();
+    assert_eq!(scene.solver_config().mass, mpm_solver::MassMatrix::Consistent);
+    let text = with("mass = \"consistent\"\ntransfer = \"apic\"\n");
+    let err = load_scene_str(&text, "apic.toml").unwrap_err().to_string();
+    assert!(err.contains("apic.toml:") && err.contains("solver.mass"), "{err}");
+    assert!(err.contains("transfer = \"flip\""), "the fix is named: {err}");
+}
