@@ -54,7 +54,7 @@ fn mass(c: &mut Criterion) {
     for n in [1_000usize, 10_000, 100_000] {
         for (name, kind) in [("lumped", MassMatrix::Lumped), ("consistent", MassMatrix::Consistent)]
         {
-            let mut solver = mpm_benches::square_on_floor_with(n, elastic.clone(), kind);
+            let mut solver = mpm_benches::square_on_floor_with(n, elastic, kind);
             for _ in 0..3 {
                 solver.step().unwrap();
             }

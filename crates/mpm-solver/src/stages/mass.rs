@@ -283,7 +283,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.consistent.rhs.copy_from_slice(&sc.force);
         let mut x = std::mem::take(&mut sc.acceleration);
         let result = self.solve_consistent(&mut x, Solve::Acceleration);
-        self.scratch.acceleration = x;
+        let sc = &mut self.scratch;
+        sc.acceleration = x;
+        // The held nodes are prescribed for this solve only: the remap's projection solves for
+        // every node above the small-mass threshold again.
+        let small = self.small_mass;
+        for &i in &sc.consistent.constrained {
+            sc.consistent.free[i as usize] = sc.mass[i as usize] > small;
+        }
         result
     }
 
@@ -330,7 +337,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let scale = (rhs.x + rhs.y).max(rz.x + rz.y);
         let target = SOLVE_TOLERANCE * SOLVE_TOLERANCE * scale;
         let mut iterations = 0;
-        while rz.x + rz.y > target {
+        // (a NaN residual enters the loop and is reported, not accepted)
+        while rz.x + rz.y > target || (rz.x + rz.y).is_nan() {
             if iterations == MAX_ITERATIONS || !(rz.x + rz.y).is_finite() {
                 cm.iterations += iterations as u64;
                 return Err(SolverError::MassSolve {
