@@ -120,6 +120,7 @@ fn variant(e: &RowError) -> &'static str {
     let RowError::Solver(e) = e else { return "set-up error" };
     match e {
         SolverError::InvalidSetting { .. } => "InvalidSetting",
+        SolverError::Incompatible { .. } => "Incompatible",
         SolverError::InvalidParticle { .. } => "InvalidParticle",
         SolverError::NoParticles => "NoParticles",
         SolverError::OutsideGrid { .. } => "OutsideGrid",

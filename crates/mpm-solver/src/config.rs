@@ -257,22 +257,19 @@ impl SolverConfig {
                 expected: "0 ≤ ratio < 1 (fraction of the mean particle mass)",
             });
         }
-        if self.periodic.is_some() && self.mass == MassMatrix::Consistent {
-            return Err(SolverError::InvalidSetting {
-                name: "mass",
-                value: f64::NAN,
-                expected: "the lumped mass matrix with periodic sides (the consistent matrix \
-                           does not fold a periodic pair of columns yet)",
-            });
-        }
-        if self.transfer == Transfer::Apic && self.mass == MassMatrix::Consistent {
-            return Err(SolverError::InvalidSetting {
-                name: "mass",
-                value: f64::NAN,
-                expected: "the lumped mass matrix with the APIC transfer (APIC's affine matrix \
-                           picks up velocity modes the consistent projection leaves to the \
-                           gradients: a thrown sand block blew up within 6 steps, measured)",
-            });
+        if self.mass == MassMatrix::Consistent {
+            let conflict = if self.transfer == Transfer::Apic {
+                // APIC's affine matrix picks up velocity modes that the consistent projection
+                // leaves to the gradients: a thrown sand block blew up within 6 steps (measured).
+                Some(("transfer", "the consistent mass matrix is unstable with APIC: use FLIP"))
+            } else if self.periodic.is_some() {
+                Some(("periodic", "the consistent mass matrix does not fold periodic columns yet"))
+            } else {
+                None
+            };
+            if let Some((with, reason)) = conflict {
+                return Err(SolverError::Incompatible { setting: "mass", with, reason });
+            }
         }
         if let Some(p) = self.periodic {
             if p.columns < 4 {

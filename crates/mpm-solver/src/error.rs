@@ -41,6 +41,16 @@ pub enum SolverError {
         /// what is admissible
         expected: &'static str,
     },
+    /// Two settings that each are admissible but not together.
+    #[error("solver setting `{setting}` cannot go with `{with}`: {reason}")]
+    Incompatible {
+        /// the setting refused
+        setting: &'static str,
+        /// the setting it conflicts with
+        with: &'static str,
+        /// why, and what to use instead
+        reason: &'static str,
+    },
     /// A particle given to the solver is inconsistent (non-positive mass, unknown material, ...).
     #[error("particle {particle} at ({x}, {y}): {reason}", x = position.x, y = position.y)]
     InvalidParticle {

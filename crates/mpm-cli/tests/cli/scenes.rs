@@ -116,5 +116,5 @@ fn the_consistent_mass_matrix_is_accepted_with_flip_and_refused_with_apic() {
     let text = with("mass = \"consistent\"\ntransfer = \"apic\"\n");
     let err = load_scene_str(&text, "apic.toml").unwrap_err().to_string();
     assert!(err.contains("apic.toml:") && err.contains("solver.mass"), "{err}");
-    assert!(err.contains("transfer = \"flip\""), "the fix is named: {err}");
+    assert!(err.contains("use FLIP") && err.contains("`transfer`"), "the fix is named: {err}");
 }

@@ -2,8 +2,7 @@
 
 use mpm_contact::Wall;
 use mpm_solver::{
-    Boundaries, MassMatrix, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep,
-    Vector, stable_dt,
+    Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
 };
 
 use super::{Ctx, finite_pos, num, pair};
@@ -161,24 +160,6 @@ pub(super) fn config(
         contact: s.contact.unwrap_or_default(),
         mass: s.mass.unwrap_or_default(),
     };
-    if config.mass == MassMatrix::Consistent && config.transfer == mpm_solver::Transfer::Apic {
-        return Err(ctx.err(
-            "solver.mass",
-            Some("\"consistent\"".into()),
-            "the consistent mass matrix with the APIC transfer is unstable (measured)",
-            "mass = \"consistent\" with transfer = \"flip\"",
-            "remove `mass` (lumped) or `transfer = \"apic\"`",
-        ));
-    }
-    if config.mass == MassMatrix::Consistent && config.periodic.is_some() {
-        return Err(ctx.err(
-            "solver.mass",
-            Some("\"consistent\"".into()),
-            "the consistent mass matrix does not fold a periodic pair of columns yet",
-            "mass = \"lumped\" with periodic sides",
-            "remove `mass` (lumped) or the periodic sides",
-        ));
-    }
     config.validate().map_err(|e| solver_error(ctx, e))?;
     Ok(config)
 }
@@ -273,6 +254,13 @@ fn solver_error(ctx: &Ctx<'_>, e: SolverError) -> SceneError {
             value,
             expected,
             "see docs/scene-format.md for the admissible range",
+        ),
+        SolverError::Incompatible { setting, with, reason } => ctx.err(
+            &format!("solver.{setting}"),
+            None,
+            format!("cannot go with `{with}`"),
+            reason,
+            format!("remove `{setting}` (its default) or change `{with}`"),
         ),
         other => ctx.err("solver", None, other.to_string(), String::new(), String::new()),
     }

@@ -17,7 +17,7 @@ use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
 
-use crate::config::Contact;
+use crate::config::{Contact, MassMatrix};
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
 use crate::solver::{NodePlane, Solver};
@@ -90,6 +90,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
         let (mut friction, mut constraint, mut impulse) = (0.0, 0.0, Vector::ZERO);
         let surface = self.config.contact == Contact::Surface;
+        let consistent = self.config.mass == MassMatrix::Consistent;
         sc.held.clear();
         sc.consistent.constrained.clear();
         for b in &sc.boundary {
@@ -98,7 +99,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             if planes.is_empty() {
                 continue;
             }
-            sc.consistent.constrained.push(b.node);
+            if consistent {
+                sc.consistent.constrained.push(b.node);
+            }
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
             let wall = match b.mirror {
