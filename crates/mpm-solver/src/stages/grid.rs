@@ -100,7 +100,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 continue;
             }
             if consistent {
+                // A ghost's image is prescribed too: the re-solve must not move it away from the
+                // value the ghost mirrors.
                 sc.consistent.constrained.push(b.node);
+                sc.consistent.constrained.extend(b.mirror.map(|m| m.image));
             }
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.

@@ -15,7 +15,8 @@
 //! the solved accelerations and velocities exactly as with the lumped matrix; then, since with a
 //! coupled matrix the held nodes' neighbours must feel the constrained motion, the free nodes are
 //! solved again with the held ones' accelerations prescribed (`resolve_constrained`; without it
-//! the fixed end of the vibrating bar shortened its period by 1.5 %, measured). The boundary
+//! the fixed end of the vibrating bar shortened its period by 1.5 %, measured). A held ghost
+//! node's image is prescribed as well, so that the ghost still mirrors its final value. The boundary
 //! impulse the ledger books is still the contact law's at the held node (lumped mass), so with
 //! boundaries the momentum balance holds to that approximation, without them to rounding.
 //!
