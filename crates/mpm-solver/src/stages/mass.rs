@@ -28,9 +28,8 @@
 //! M^C is a sum of rank-one terms m_p S_p S_pᵀ: wherever fewer particles than nodes reach a group
 //! of nodes (a lone grain: four nodes, one particle) it is singular, and a force outside its range
 //! has no solution. Two things keep the solved matrix symmetric positive definite:
-//! - a node below the small-mass threshold (§2(3)), or reached by fewer particles than a stencil
-//!   has nodes, is not solved for: it keeps the lumped value (for the acceleration, f_i / m_i, or
-//!   the body force below the threshold), and the couplings M^C_ij of a solved node i to such
+//! - a node below the small-mass threshold (§2(3)) is not solved for: it keeps the lumped value
+//!   (for the acceleration, the body force), and the couplings M^C_ij of a solved node i to such
 //!   a node are added to M_ii, so that every solved row still sums to m_i;
 //! - the share α of the lumped matrix: since 0 ≤ xᵀM^C x ≤ xᵀM^L x (Jensen, the weights being a
 //!   partition of unity), the eigenvalues of (M^L)⁻¹M lie in [α, 1].
@@ -110,9 +109,7 @@ pub(crate) struct ConsistentScratch {
     neighbours: Vec<u32>,
     /// The matrix, row by row in the band layout.
     values: Vec<Real>,
-    /// Particles whose stencil gives each node a positive weight.
-    reach: Vec<u32>,
-    /// Nodes solved for ([`solvable`]).
+    /// Nodes solved for (lumped mass above the small-mass threshold).
     free: Vec<bool>,
     /// Right-hand side, residual, search direction, its product with M.
     rhs: Vec<Vector>,
@@ -136,7 +133,6 @@ impl ConsistentScratch {
         self.neighbours.capacity() * size_of::<u32>()
             + self.values.capacity() * size_of::<Real>()
             + self.free.capacity()
-            + self.reach.capacity() * size_of::<u32>()
             + (self.rhs.capacity()
                 + self.residual.capacity()
                 + self.direction.capacity()
@@ -150,16 +146,6 @@ impl ConsistentScratch {
 const fn band_place(k: usize, l: usize, w: usize) -> usize {
     let wide = 2 * w - 1;
     (l % w + w - 1 - k % w) + wide * (l / w + w - 1 - k / w)
-}
-
-/// whether a node of lumped mass `m`, which `reach` particles weigh, is solved for with stencils
-/// of `N` nodes: above the small-mass threshold (§2(3)), and reached by at least as many
-/// particles as a stencil has nodes. M^C over a group of nodes is a sum of one rank-one term
-/// per particle, so it can only be regular where at least as many particles as nodes reach it;
-/// a node at the edge of a thinning flow, or under a lone grain, fails that count and keeps the
-/// lumped answer instead of a mode only the gradients see.
-fn solvable<const N: usize>(m: Real, reach: u32, small: Real) -> bool {
-    m > small && reach as usize >= N
 }
 
 /// Σ over fixed chunks of `f(chunk range)`, in chunk order: bit-identical for any thread count.
@@ -207,8 +193,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         for v in [&mut cm.rhs, &mut cm.residual, &mut cm.direction, &mut cm.product] {
             v.resize(nodes, Vector::ZERO);
         }
-        cm.reach.clear();
-        cm.reach.resize(nodes, 0);
+        let small = self.small_mass;
+        cm.free.clear();
+        cm.free.extend(sc.mass.iter().map(|&m| m > small));
 
         // Σ_p m_p S_ip S_jp, particle by particle in index order.
         let place: [[usize; N]; N] =
@@ -219,7 +206,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             let idx = &sc.node_index[q];
             let m = p.mass[q];
             for k in 0..N {
-                cm.reach[idx[k] as usize] += u32::from(s[k] > 0.0);
                 let row = &mut cm.values[idx[k] as usize * band..][..band];
                 let mk = m * s[k];
                 for l in 0..N {
@@ -227,10 +213,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 }
             }
         }
-
-        let small = self.small_mass;
-        cm.free.clear();
-        cm.free.extend(sc.mass.iter().zip(&cm.reach).map(|(&m, &r)| solvable::<N>(m, r, small)));
 
         // Couplings to nodes not solved for go onto the diagonal, then the lumped share.
         let (neighbours, free, mass) = (&cm.neighbours[..], &cm.free[..], &sc.mass[..]);
@@ -306,10 +288,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.acceleration = x;
         // The held nodes are prescribed for this solve only: the remap's projection solves for
         // every node above the small-mass threshold again.
-        let (small, cm) = (self.small_mass, &mut sc.consistent);
-        for &i in &cm.constrained {
-            let i = i as usize;
-            cm.free[i] = solvable::<N>(sc.mass[i], cm.reach[i], small);
+        let small = self.small_mass;
+        for &i in &sc.consistent.constrained {
+            sc.consistent.free[i as usize] = sc.mass[i as usize] > small;
         }
         result
     }
