@@ -167,4 +167,26 @@ pub enum SolverError {
         /// the model's error
         source: ConstitutiveError,
     },
+    /// The implicit initial state ([`crate::GeostaticSettings`]) found no equilibrium.
+    #[error(
+        "implicit initial state: no equilibrium at {attempted_pct:.2} % of gravity after {iterations} \
+         Newton iterations (residual {residual:.3e} of the gravity load; in equilibrium up to \
+         {load_pct:.2} % of gravity): {cause}. The material cannot stand as given: a slope \
+         steeper than its friction holds, a base that cannot hold it, or a body no boundary \
+         supports",
+        attempted_pct = 100.0 * attempted,
+        load_pct = 100.0 * load_factor
+    )]
+    InitialState {
+        /// the largest load factor (share of gravity) in equilibrium
+        load_factor: f64,
+        /// the load factor of the last attempt
+        attempted: f64,
+        /// Newton iterations taken in all
+        iterations: u32,
+        /// the last ‖R‖ / ‖f^ext‖
+        residual: f64,
+        /// why the last attempt failed
+        cause: String,
+    },
 }

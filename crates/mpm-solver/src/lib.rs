@@ -47,6 +47,7 @@ pub mod config;
 pub mod energy;
 pub mod error;
 pub mod generate;
+pub mod geostatic;
 pub mod math;
 mod par;
 pub use par::{PARTICLES_PER_THREAD, useful_threads};
@@ -60,6 +61,7 @@ pub use config::{
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
+pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
 pub use solver::{BranchCounts, Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};

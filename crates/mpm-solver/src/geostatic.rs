@@ -1,0 +1,989 @@
+//! The geostatic initial state: the stresses of material at rest under gravity, from an implicit
+//! quasi-static solve on the run's own grid, shape functions and boundaries (beyond the paper,
+//! whose runs start stress-free).
+//!
+//! # Glossary
+//! - u_i: displacement of active node i during the solve (m). The particles do not move: their
+//!   stencils S_ip, G_ip stay those of their current positions, and only their stresses and
+//!   internal variables change; velocities stay zero.
+//! - Δε_p = sym(Σ_i u_i ⊗ G_ip): a particle's strain increment over one load step (eq 9 with
+//!   u in place of v Δt), tension positive.
+//! - λ: the load factor, the share of gravity applied; f_i^ext = λ Σ_p m_p S_ip g (eq 3).
+//! - f_i^int = Σ_p V_p σ_p G_ip (eq 2 with its sign), R = f^ext − f^int: the out-of-balance
+//!   force, zero at equilibrium. Its norm is measured against ‖f^ext‖ at λ = 1.
+//! - D_p: the 3 × 3 plane-strain block (rows and columns xx, yy, xy with tensor shear) of the
+//!   model's consistent tangent ([`TangentModel::consistent_tangent`]) at the load step's start
+//!   state and the current increment; K_ij = Σ_p V_p F_ipᵀ D_p B_jp with B_jp the strain of a
+//!   unit displacement of node j and F_ip the force on node i of a unit stress.
+//!
+//! # Constraints
+//! Every plane that holds a node in the explicit run's first step holds it here
+//! (`Solver::detect_contact` with Δt = 0: under surface contact, where a particle's edge lies on
+//! the plane), read as a displacement constraint:
+//! - a frictionless plane fixes the normal component u·n = 0 (a roller); two planes of different
+//!   normals (a corner) fix the node;
+//! - a plane with friction (Coulomb μ > 0, rough, fixed) fixes the node (stuck). Afterwards the
+//!   reactions are checked against the friction law: where the sum of the tangential reactions
+//!   on the Coulomb planes exceeds μ times the sum of their normal reactions the material would
+//!   slide as a whole, and the solve fails (`SlidingBase`);
+//! - a ghost node of a wide stencil (uGIMP, B-spline) mirrors its image's normal displacement
+//!   as in the explicit run: u_g·n = −u_image·n, its tangential part free on a frictionless plane
+//!   and zero otherwise, u_g = −u_image on a fixed plane.
+//!
+//! The free components are the unknowns (a node on an inclined frictionless plane has one, along
+//! the plane): the system is K reduced to them, assembled as triplets and factorised with faer's
+//! sparse LU (partial pivoting: the tangent of non-associated flow is not symmetric).
+//!
+//! # The iteration
+//! Gravity is applied in load steps (`GeostaticSettings::load_steps`, 1 by default). Each load
+//! step runs Newton iterations from the stresses and internal variables at its start: the
+//! stresses of an increment come from one return mapping from that start (backward Euler, as an
+//! implicit finite element code integrates them), the tangent is the model's consistent one, and
+//! each correction is damped by a backtracking line search on ‖R‖. A load step that does not
+//! converge within `max_iterations`, or whose nodes move more than a cell (no small-strain
+//! equilibrium: a material that cannot stand, or a body no boundary holds), is retried with
+//! half the load increment, at most `max_cutbacks` times in a row; then the solve fails with the
+//! last load factor in equilibrium, which is a gravity-increase factor of safety in disguise.
+//!
+//! A zero tangent (a cohesionless point returned to the apex of its cone) or an hourglass mode
+//! of a cell with few particles would make K singular: a shift of [`DIAGONAL_SHIFT`] times the
+//! elastic diagonal keeps it regular. It changes only the path, not the answer (the residual
+//! is evaluated without it), at the price of one or two more iterations of a linear problem.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use mpm_constitutive::{Branch, PlaneTensor, Tangent, TangentModel};
+use mpm_contact::Friction;
+use mpm_grid::ShapeFunctions;
+
+use crate::error::SolverError;
+use crate::math::{Real, Vector};
+use crate::solver::Solver;
+
+/// Relative shift of the stiffness matrix's diagonal (module docs): 1e-8 of the elastic diagonal
+/// keeps K regular where a tangent vanishes, while a linear problem still converges by a factor
+/// of about 1e-8 × the condition number per iteration (two iterations at the K0 layer's size).
+pub const DIAGONAL_SHIFT: Real = 1e-8;
+
+/// A point whose tangent has a diagonal entry below this share of its P-wave modulus (a
+/// cohesionless point returned to its cone's apex has none at all) gets this share added to
+/// its diagonal in K: the node it alone supports then moves a bounded amount and its particles
+/// are compressed back onto the cone at the next iteration, instead of the node flying off with
+/// only the diagonal shift to hold it. It changes the iteration, not its converged answer.
+pub const TANGENT_FLOOR: Real = 1e-2;
+
+/// A free node whose mass is below this share of the heaviest node's (a node reached only by
+/// the far corners of one or two particles, where the free surface cuts a cell) is poorly
+/// supported: its own equilibrium would ask a surface particle for a traction that a
+/// cohesionless material cannot give (no equilibrium exists on that grid), and its
+/// displacement is not an unknown but the mean of its well-supported neighbours'. Its
+/// out-of-balance force then goes to them (the reduced residual Tᵀ R). A node reached by the
+/// nearest quarter of one particle of a 2 × 2 lattice has 6 % (a full node 100 %, one on a
+/// straight free surface 50 %, at a body's corner 25 %).
+pub const TIE_RATIO: Real = 0.05;
+
+/// The time over which a load step is taken (s), for rate-dependent models (μ(I)): a
+/// quasi-static increment, whose strain rate is that of a 1 s loading.
+pub const QUASI_STATIC_DT: Real = 1.0;
+
+/// Settings of the implicit solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GeostaticSettings {
+    /// Load steps that share gravity equally (≥ 1). More steps follow a plastic loading path
+    /// more closely; a load step that fails is split anyway.
+    pub load_steps: u32,
+    /// Newton iterations allowed per load step.
+    pub max_iterations: u32,
+    /// Equilibrium: ‖R‖ ≤ tolerance · ‖f^ext‖ at full gravity.
+    pub tolerance: Real,
+    /// Halvings of a load increment allowed in a row before the solve fails.
+    pub max_cutbacks: u32,
+}
+
+impl Default for GeostaticSettings {
+    /// one load step, 50 iterations, 1e-10, 10 halvings (the smallest increment 1/1024 of
+    /// gravity).
+    fn default() -> Self {
+        Self { load_steps: 1, max_iterations: 50, tolerance: 1e-10, max_cutbacks: 10 }
+    }
+}
+
+impl GeostaticSettings {
+    /// checks every setting's range.
+    pub fn validate(&self) -> Result<(), SolverError> {
+        let bad =
+            |name, value: f64, expected| Err(SolverError::InvalidSetting { name, value, expected });
+        if self.load_steps == 0 || self.load_steps > 100_000 {
+            return bad("initial_state.load_steps", self.load_steps.into(), "1 ≤ load_steps ≤ 1e5");
+        }
+        if self.max_iterations == 0 || self.max_iterations > 10_000 {
+            return bad(
+                "initial_state.max_iterations",
+                self.max_iterations.into(),
+                "1 ≤ max_iterations ≤ 1e4",
+            );
+        }
+        if !(self.tolerance > 1e-15 && self.tolerance < 1.0) {
+            return bad("initial_state.tolerance", self.tolerance, "1e-15 < tolerance < 1");
+        }
+        if self.max_cutbacks > 50 {
+            return bad(
+                "initial_state.max_cutbacks",
+                self.max_cutbacks.into(),
+                "0 ≤ max_cutbacks ≤ 50",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// One Newton iteration of the solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewtonIteration {
+    /// the load factor the iteration aims at.
+    pub load_factor: Real,
+    /// its number within the load step (0: the residual before any correction).
+    pub iteration: u32,
+    /// ‖R‖ / ‖f^ext(λ = 1)‖ after it.
+    pub residual: Real,
+}
+
+/// What the implicit solve did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeostaticReport {
+    /// Load steps that converged.
+    pub load_steps: u32,
+    /// Load increments halved after a failed attempt.
+    pub cutbacks: u32,
+    /// Newton iterations (linear solves), over all load steps and attempts.
+    pub iterations: u32,
+    /// The residual history, every iteration of every attempt in order.
+    pub history: Vec<NewtonIteration>,
+    /// The final ‖R‖ / ‖f^ext‖.
+    pub residual: Real,
+    /// Unknowns of the reduced system.
+    pub unknowns: usize,
+    /// Nodes a boundary constrains.
+    pub constrained_nodes: usize,
+    /// Particles whose last update left the elastic branch.
+    pub plastic_particles: usize,
+    /// Largest nodal displacement of the solve (m): its small-strain measure.
+    pub max_displacement: Real,
+    /// Constrained nodes on a Coulomb plane whose tangential reaction exceeds μ times their
+    /// normal one (the material there would slip locally; see `base_friction_ratio`).
+    pub slipping_nodes: usize,
+    /// Σ|tangential reaction| / Σ μ·normal reaction over the nodes on Coulomb planes with μ > 0
+    /// (0 where there are none): above 1 the base cannot hold the material.
+    pub base_friction_ratio: Real,
+    /// Free nodes whose mass is below [`TIE_RATIO`] of the heaviest node's, which follow their
+    /// neighbours instead of being unknowns of their own.
+    pub tied_nodes: usize,
+}
+
+/// How one node's displacement is made of the unknowns: u_i = Σ_k c_k s_{r_k}.
+#[derive(Clone, Debug, Default)]
+struct NodeDofs {
+    entries: Vec<(u32, Vector)>,
+}
+
+impl NodeDofs {
+    fn entries(&self) -> &[(u32, Vector)] {
+        &self.entries
+    }
+    fn push(&mut self, r: u32, c: Vector) {
+        self.entries.push((r, c));
+    }
+    /// adds `weight` times the map `other`, merging equal unknowns.
+    fn add(&mut self, other: &NodeDofs, weight: impl Fn(Vector) -> Vector) {
+        for &(r, c) in &other.entries {
+            match self.entries.iter_mut().find(|e| e.0 == r) {
+                Some(e) => e.1 += weight(c),
+                None => self.entries.push((r, weight(c))),
+            }
+        }
+    }
+}
+
+/// How a boundary node is held (before ghosts are expressed through their images).
+#[derive(Clone, Copy, Debug)]
+enum Hold {
+    Free,
+    /// u·n = 0.
+    Roller(Vector),
+    Fixed,
+    /// a ghost node: mirrors its image across a plane of this normal.
+    Ghost {
+        image: u32,
+        normal: Vector,
+        tangential: bool,
+        fixed: bool,
+    },
+}
+
+/// Normals closer than this (1 − cos θ) are one plane's (the two planes of a kink of a few
+/// degrees are not: 1 − cos 1° = 1.5e-4).
+const SAME_NORMAL: Real = 1e-9;
+
+/// A load step's attempt that did not reach equilibrium, and why.
+struct Failed {
+    cause: String,
+}
+
+impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// Puts the material into equilibrium with gravity (module docs): particle stresses and
+    /// internal variables become those of the geostatic state, positions and velocities do not
+    /// change, and the energy ledger starts from the new stored energy. Call before the first
+    /// step.
+    ///
+    /// On failure the particles keep the state they had, and the error names the last load
+    /// factor in equilibrium, the residual and the cause.
+    pub fn solve_geostatic(
+        &mut self,
+        settings: &GeostaticSettings,
+    ) -> Result<GeostaticReport, SolverError> {
+        settings.validate()?;
+        if self.step != 0 {
+            return Err(SolverError::InvalidSetting {
+                name: "initial_state",
+                value: self.step as f64,
+                expected: "an initial state is solved before the first step",
+            });
+        }
+        self.locate()?;
+        self.detect_contact(0.0);
+        let nodes = self.scratch.active.len();
+        let (dofs, unknowns, holds, ties) = self.node_dofs();
+        let g = self.config.gravity;
+
+        // f^ext at full gravity, and each node's elastic stiffness scale for the shift.
+        let mut f_grav = vec![Vector::ZERO; nodes];
+        let mut k_scale = vec![0.0; nodes];
+        {
+            let p = &self.particles;
+            let sc = &self.scratch;
+            for q in 0..p.len() {
+                let (w, gr) =
+                    (self.shape.weights(&sc.factors[q]), self.shape.gradients(&sc.factors[q]));
+                let modulus = self.p_modulus[usize::from(p.material[q])];
+                for k in 0..N {
+                    let i = sc.node_index[q][k] as usize;
+                    f_grav[i] += p.mass[q] * w[k] * g;
+                    k_scale[i] += p.volume[q] * modulus * gr[k].length_squared();
+                }
+            }
+        }
+        let reduce = |full: &[Vector], out: &mut Vec<Real>| {
+            out.clear();
+            out.resize(unknowns, 0.0);
+            for (i, d) in dofs.iter().enumerate() {
+                for &(r, c) in d.entries() {
+                    out[r as usize] += c.dot(full[i]);
+                }
+            }
+        };
+        let mut scale = Vec::new();
+        reduce(&f_grav, &mut scale);
+        let load_norm = norm(&scale).max(Real::MIN_POSITIVE);
+        let mut shift = vec![0.0; unknowns];
+        for (i, d) in dofs.iter().enumerate() {
+            for &(r, c) in d.entries() {
+                shift[r as usize] += DIAGONAL_SHIFT * c.length_squared() * k_scale[i];
+            }
+        }
+
+        let start_stress = self.particles.stress.clone();
+        let start_state = self.particles.state.clone();
+        let mut report = GeostaticReport {
+            load_steps: 0,
+            cutbacks: 0,
+            iterations: 0,
+            history: Vec::new(),
+            residual: 0.0,
+            unknowns,
+            constrained_nodes: holds.iter().filter(|h| !matches!(h, Hold::Free)).count(),
+            plastic_particles: 0,
+            max_displacement: 0.0,
+            slipping_nodes: 0,
+            base_friction_ratio: 0.0,
+            tied_nodes: ties,
+        };
+        // The stresses and states at the start of the current load step (committed ones).
+        let mut base_stress = start_stress.clone();
+        let mut base_state = start_state.clone();
+        let mut total_u = vec![Vector::ZERO; nodes];
+        let mut lambda = 0.0;
+        let nominal = 1.0 / Real::from(settings.load_steps);
+        let mut increment = nominal;
+        let mut halvings = 0;
+        let mut work = Work::new(nodes, unknowns);
+        work.branches.resize(self.particles.len(), Branch::ELASTIC);
+        let restore = |s: &mut Self| {
+            s.particles.stress.clone_from(&start_stress);
+            s.particles.state.clone_from(&start_state);
+        };
+        while lambda < 1.0 {
+            let target = if 1.0 - (lambda + increment) < 1e-12 { 1.0 } else { lambda + increment };
+            let attempt = self.newton(
+                target,
+                settings,
+                &dofs,
+                &f_grav,
+                &shift,
+                load_norm,
+                &base_stress,
+                &base_state,
+                &mut work,
+                &mut report,
+            );
+            match attempt {
+                Ok(()) => {
+                    lambda = target;
+                    report.load_steps += 1;
+                    halvings = 0;
+                    for (t, u) in total_u.iter_mut().zip(&work.u_full) {
+                        *t += *u;
+                    }
+                    base_stress.clone_from(&self.particles.stress);
+                    base_state.clone_from(&self.particles.state);
+                    // back towards the nominal increment after a cut
+                    increment = (2.0 * increment).min(nominal);
+                }
+                Err(Failed { cause }) => {
+                    halvings += 1;
+                    report.cutbacks += 1;
+                    if halvings > settings.max_cutbacks {
+                        restore(self);
+                        return Err(SolverError::InitialState {
+                            load_factor: lambda,
+                            attempted: target,
+                            iterations: report.iterations,
+                            residual: report.history.last().map_or(Real::NAN, |h| h.residual),
+                            cause,
+                        });
+                    }
+                    increment *= 0.5;
+                    self.particles.stress.clone_from(&base_stress);
+                    self.particles.state.clone_from(&base_state);
+                }
+            }
+        }
+        report.residual = report.history.last().map_or(0.0, |h| h.residual);
+        report.max_displacement = total_u.iter().map(|u| u.length()).fold(0.0, Real::max);
+        report.plastic_particles = work.branches.iter().filter(|b| **b != Branch::ELASTIC).count();
+
+        // The reactions against the friction laws (module docs).
+        self.internal_forces(&mut work.f_full);
+        let (mut tangential, mut capacity) = (0.0, 0.0);
+        for b in &self.scratch.boundary {
+            let i = b.node as usize;
+            let reaction = -(f_grav[i] - work.f_full[i]);
+            for plane in self.scratch.node_planes[b.planes()].iter().filter(|p| p.held) {
+                if let Friction::Coulomb { mu } = plane.wall.boundary().friction() {
+                    if mu > 0.0 && matches!(holds[i], Hold::Fixed) {
+                        let n = plane.wall.normal();
+                        let normal = reaction.dot(n);
+                        let t = (reaction - normal * n).length();
+                        tangential += t;
+                        capacity += mu * normal.max(0.0);
+                        if t > mu * normal.max(0.0) * (1.0 + 1e-9) {
+                            report.slipping_nodes += 1;
+                        }
+                    }
+                }
+            }
+        }
+        if tangential > 0.0 {
+            report.base_friction_ratio = tangential / capacity;
+            if tangential > capacity {
+                restore(self);
+                return Err(SolverError::InitialState {
+                    load_factor: 1.0,
+                    attempted: 1.0,
+                    iterations: report.iterations,
+                    residual: report.residual,
+                    cause: format!(
+                        "the material is in equilibrium only on a stuck base: the tangential \
+                         reactions on the friction planes sum to {tangential:.4e} N/m, {:.3} \
+                         times what their friction can hold ({capacity:.4e} N/m); the body would \
+                         slide as a whole (a retaining wall or gate, or a rougher base, holds it)",
+                        tangential / capacity
+                    ),
+                });
+            }
+        }
+
+        let p = &mut self.particles;
+        p.velocity.fill(Vector::ZERO);
+        for a in &mut p.affine {
+            *a = crate::math::Matrix::ZERO;
+        }
+        self.next_signal = None;
+        self.initial_stored = self.energy().stored();
+        Ok(report)
+    }
+
+    /// the Newton iterations of one load step to the load factor `target`, from the committed
+    /// stresses and states `base_*`: on success the particles hold the step's stresses and
+    /// `work.u_full` its displacement increment.
+    #[allow(clippy::too_many_arguments)]
+    fn newton(
+        &mut self,
+        target: Real,
+        settings: &GeostaticSettings,
+        dofs: &[NodeDofs],
+        f_grav: &[Vector],
+        shift: &[Real],
+        load_norm: Real,
+        base_stress: &[PlaneTensor],
+        base_state: &[M::State],
+        work: &mut Work,
+        report: &mut GeostaticReport,
+    ) -> Result<(), Failed> {
+        work.s.fill(0.0);
+        let start = work.s.clone();
+        self.residual(target, dofs, f_grav, base_stress, base_state, work, &start)?;
+        let mut r_norm = norm(&work.r) / load_norm;
+        report.history.push(NewtonIteration {
+            load_factor: target,
+            iteration: 0,
+            residual: r_norm,
+        });
+        for it in 1..=settings.max_iterations {
+            if r_norm <= settings.tolerance {
+                return Ok(());
+            }
+            // K from the tangents at the current increment.
+            let correction = self.correction(dofs, shift, base_stress, base_state, work)?;
+            // Backtracking on ‖R‖: the full Newton step, else halves of it.
+            let s0 = work.s.clone();
+            let mut moved = 0.0;
+            let mut accepted = false;
+            let mut factor = 1.0;
+            for _ in 0..6 {
+                let trial: Vec<Real> =
+                    s0.iter().zip(&correction).map(|(s, d)| s + factor * d).collect();
+                match self.residual(target, dofs, f_grav, base_stress, base_state, work, &trial) {
+                    Ok(res) => {
+                        let n = norm(&work.r) / load_norm;
+                        if n < r_norm || factor < 0.05 {
+                            work.s = trial;
+                            moved = res;
+                            r_norm = n;
+                            accepted = true;
+                            break;
+                        }
+                    }
+                    Err(_) if factor >= 0.05 => {}
+                    Err(e) => return Err(e),
+                }
+                factor *= 0.5;
+            }
+            report.iterations += 1;
+            report.history.push(NewtonIteration {
+                load_factor: target,
+                iteration: it,
+                residual: r_norm,
+            });
+            if !accepted {
+                return Err(Failed {
+                    cause: format!("no correction reduced the residual ({r_norm:.3e})"),
+                });
+            }
+            if moved > self.cell_size {
+                return Err(Failed {
+                    cause: format!(
+                        "a node moved {moved:.3e} m, more than a cell ({:.3e} m): no \
+                         small-strain equilibrium (a material that cannot stand, or a body no \
+                         boundary holds)",
+                        self.cell_size
+                    ),
+                });
+            }
+            if !r_norm.is_finite() {
+                return Err(Failed { cause: "the residual is not finite".into() });
+            }
+        }
+        if r_norm <= settings.tolerance {
+            return Ok(());
+        }
+        Err(Failed {
+            cause: format!(
+                "the residual stayed at {r_norm:.3e} (tolerance {:.1e}) after {} iterations",
+                settings.tolerance, settings.max_iterations
+            ),
+        })
+    }
+
+    /// the stresses of the increment `s` (unknowns) from the base state, written to the
+    /// particles, and the reduced residual in `work.r`; returns the largest nodal displacement.
+    #[allow(clippy::too_many_arguments)]
+    fn residual(
+        &mut self,
+        target: Real,
+        dofs: &[NodeDofs],
+        f_grav: &[Vector],
+        base_stress: &[PlaneTensor],
+        base_state: &[M::State],
+        work: &mut Work,
+        s: &[Real],
+    ) -> Result<Real, Failed> {
+        expand(dofs, s, &mut work.u_full);
+        let largest = work.u_full.iter().map(|u| u.length()).fold(0.0, Real::max);
+        if !largest.is_finite() {
+            return Err(Failed {
+                cause: "the displacement is not finite (a singular system)".into(),
+            });
+        }
+        let sc = &self.scratch;
+        let p = &mut self.particles;
+        for q in 0..p.len() {
+            let d_eps =
+                strain(&self.shape.gradients(&sc.factors[q]), &sc.node_index[q], &work.u_full);
+            let model = &self.materials[usize::from(p.material[q])];
+            let (mut sigma, mut state) = (base_stress[q], base_state[q]);
+            let rep = model
+                .update_plane(&mut sigma, &mut state, &d_eps, QUASI_STATIC_DT, None)
+                .map_err(|e| Failed {
+                    cause: format!(
+                        "particle {q} at ({}, {}): {e}",
+                        p.position[q].x, p.position[q].y
+                    ),
+                })?;
+            p.stress[q] = sigma;
+            p.state[q] = state;
+            work.branches[q] = rep.branch;
+        }
+        self.internal_forces(&mut work.f_full);
+        let out = &mut work.r;
+        out.clear();
+        out.resize(s.len(), 0.0);
+        for (i, d) in dofs.iter().enumerate() {
+            let r_i = target * f_grav[i] - work.f_full[i];
+            for &(r, c) in d.entries() {
+                out[r as usize] += c.dot(r_i);
+            }
+        }
+        Ok(largest)
+    }
+
+    /// f_i^int = Σ_p V_p σ_p G_ip at the particles' current stresses, into `out`.
+    fn internal_forces(&self, out: &mut Vec<Vector>) {
+        let sc = &self.scratch;
+        let p = &self.particles;
+        out.clear();
+        out.resize(sc.active.len(), Vector::ZERO);
+        for q in 0..p.len() {
+            let gr = self.shape.gradients(&sc.factors[q]);
+            let s = p.stress[q];
+            for k in 0..N {
+                let g = gr[k];
+                out[sc.node_index[q][k] as usize] +=
+                    p.volume[q] * Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y);
+            }
+        }
+    }
+
+    /// solves K δ = R (reduced) with the tangents at the current increment.
+    fn correction(
+        &self,
+        dofs: &[NodeDofs],
+        shift: &[Real],
+        base_stress: &[PlaneTensor],
+        base_state: &[M::State],
+        work: &Work,
+    ) -> Result<Vec<Real>, Failed> {
+        let sc = &self.scratch;
+        let p = &self.particles;
+        let unknowns = shift.len();
+        let mut triplets: Vec<Triplet<usize, usize, Real>> =
+            Vec::with_capacity(p.len() * N * N * 4);
+        for (r, &d) in shift.iter().enumerate() {
+            triplets.push(Triplet::new(r, r, d));
+        }
+        for q in 0..p.len() {
+            let gr = self.shape.gradients(&sc.factors[q]);
+            let idx = &sc.node_index[q];
+            let d_eps = strain(&gr, idx, &work.u_full);
+            let model = &self.materials[usize::from(p.material[q])];
+            let t = model
+                .consistent_tangent(
+                    &base_stress[q].to_sym(),
+                    &base_state[q],
+                    &d_eps.to_sym(),
+                    QUASI_STATIC_DT,
+                )
+                .map_err(|e| Failed { cause: format!("tangent of particle {q}: {e}") })?;
+            let mut d = plane_block(&t);
+            // a vanishing tangent (a point at its cone's apex) gets a floor (module docs)
+            let floor = TANGENT_FLOOR * self.p_modulus[usize::from(p.material[q])];
+            if d.iter().flatten().all(|x| x.abs() < floor) {
+                for (a, row) in d.iter_mut().enumerate() {
+                    row[a] += floor;
+                }
+            }
+            let v = p.volume[q];
+            for l in 0..N {
+                let gl = gr[l];
+                // D B_l: the stress of unit displacements of node l along x and y.
+                let col = |b: usize| -> [Real; 3] {
+                    let (bx, by, bs) =
+                        if b == 0 { (gl.x, 0.0, 0.5 * gl.y) } else { (0.0, gl.y, 0.5 * gl.x) };
+                    std::array::from_fn(|a| d[a][0] * bx + d[a][1] * by + d[a][2] * bs)
+                };
+                let (dbx, dby) = (col(0), col(1));
+                for k in 0..N {
+                    let gk = gr[k];
+                    let row = |db: &[Real; 3]| {
+                        Vector::new(gk.x * db[0] + gk.y * db[2], gk.y * db[1] + gk.x * db[2]) * v
+                    };
+                    // the 2 × 2 block K_kl by columns: force on k of unit u_l along x, along y.
+                    let (kx, ky) = (row(&dbx), row(&dby));
+                    for &(r1, c1) in dofs[idx[k] as usize].entries() {
+                        for &(r2, c2) in dofs[idx[l] as usize].entries() {
+                            // c1ᵀ K_kl c2
+                            let val = c1.dot(kx * c2.x + ky * c2.y);
+                            if val != 0.0 {
+                                triplets.push(Triplet::new(r1 as usize, r2 as usize, val));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let k = SparseColMat::<usize, Real>::try_new_from_triplets(unknowns, unknowns, &triplets)
+            .map_err(|e| Failed { cause: format!("cannot assemble the stiffness: {e:?}") })?;
+        let lu = k.sp_lu().map_err(|e| Failed { cause: format!("singular stiffness: {e:?}") })?;
+        let rhs = faer::Mat::<Real>::from_fn(unknowns, 1, |r, _| work.r[r]);
+        let x = lu.solve(&rhs);
+        let out: Vec<Real> = (0..unknowns).map(|r| x[(r, 0)]).collect();
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(Failed {
+                cause: "the stiffness is singular (a body no boundary holds?)".into(),
+            });
+        }
+        Ok(out)
+    }
+
+    /// how each active node's displacement is made of the unknowns (module docs), the number of
+    /// unknowns, and how each node is held.
+    fn node_dofs(&self) -> (Vec<NodeDofs>, usize, Vec<Hold>, usize) {
+        let sc = &self.scratch;
+        let nodes = sc.active.len();
+        let mut holds = vec![Hold::Free; nodes];
+        for b in &sc.boundary {
+            let planes: Vec<_> = sc.node_planes[b.planes()]
+                .iter()
+                .filter(|p| p.held)
+                .map(|p| *p.wall.boundary())
+                .collect();
+            if planes.is_empty() {
+                continue;
+            }
+            let i = b.node as usize;
+            if let Some(m) = b.mirror {
+                let frictionless = planes
+                    .iter()
+                    .all(|p| matches!(p.friction(), Friction::Coulomb { mu } if mu == 0.0));
+                holds[i] = Hold::Ghost {
+                    image: m.image,
+                    normal: m.normal,
+                    tangential: frictionless && !m.fixed,
+                    fixed: m.fixed,
+                };
+                continue;
+            }
+            let sticks = planes
+                .iter()
+                .any(|p| !matches!(p.friction(), Friction::Coulomb { mu } if mu == 0.0));
+            let n0 = planes[0].normal();
+            let one_plane = planes.iter().all(|p| 1.0 - p.normal().dot(n0) < SAME_NORMAL);
+            holds[i] = if sticks || !one_plane { Hold::Fixed } else { Hold::Roller(n0) };
+        }
+        // Poorly supported free nodes follow their well-supported neighbours (module docs).
+        let mut mass = vec![0.0; nodes];
+        for q in 0..self.particles.len() {
+            let w = self.shape.weights(&sc.factors[q]);
+            for k in 0..N {
+                mass[sc.node_index[q][k] as usize] += self.particles.mass[q] * w[k];
+            }
+        }
+        let heaviest = mass.iter().copied().fold(0.0, Real::max);
+        let poor = |i: usize| matches!(holds[i], Hold::Free) && mass[i] < TIE_RATIO * heaviest;
+        let mut dofs = vec![NodeDofs::default(); nodes];
+        let mut next = 0u32;
+        let mut new_dof = || {
+            next += 1;
+            next - 1
+        };
+        for (i, (d, h)) in dofs.iter_mut().zip(&holds).enumerate() {
+            match *h {
+                Hold::Free if poor(i) => {}
+                Hold::Free => {
+                    d.push(new_dof(), Vector::X);
+                    d.push(new_dof(), Vector::Y);
+                }
+                Hold::Roller(n) => d.push(new_dof(), n.perp()),
+                Hold::Fixed | Hold::Ghost { .. } => {}
+            }
+        }
+        let mut ties = 0;
+        for i in 0..nodes {
+            if !poor(i) {
+                continue;
+            }
+            let at = sc.active.nodes()[i];
+            let mut sources = Vec::new();
+            for (di, dj) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                let Some(j) = sc.active.index_of(mpm_grid::NodeId::new(at.i + di, at.j + dj))
+                else {
+                    continue;
+                };
+                if !poor(j) && !matches!(holds[j], Hold::Ghost { .. }) {
+                    sources.push(j);
+                }
+            }
+            if sources.is_empty() {
+                // nothing to follow: its own unknowns
+                dofs[i].push(new_dof(), Vector::X);
+                dofs[i].push(new_dof(), Vector::Y);
+                continue;
+            }
+            let w = 1.0 / sources.len() as Real;
+            let mut d = NodeDofs::default();
+            for j in sources {
+                d.add(&dofs[j], |c| w * c);
+            }
+            dofs[i] = d;
+            ties += 1;
+        }
+        for i in 0..nodes {
+            if let Hold::Ghost { image, normal, tangential, fixed } = holds[i] {
+                let img = dofs[image as usize].clone();
+                if fixed {
+                    dofs[i].add(&img, |c| -c);
+                    continue;
+                }
+                if tangential {
+                    dofs[i].push(new_dof(), normal.perp());
+                }
+                dofs[i].add(&img, |c| -normal.dot(c) * normal);
+            }
+        }
+        (dofs, next as usize, holds, ties)
+    }
+}
+
+/// Vectors reused over the iterations.
+struct Work {
+    /// the load step's increment in the unknowns.
+    s: Vec<Real>,
+    /// ... and at the nodes.
+    u_full: Vec<Vector>,
+    /// f^int at the nodes.
+    f_full: Vec<Vector>,
+    /// the reduced residual.
+    r: Vec<Real>,
+    /// each particle's branch at its last update.
+    branches: Vec<Branch>,
+}
+
+impl Work {
+    fn new(nodes: usize, unknowns: usize) -> Self {
+        Self {
+            s: vec![0.0; unknowns],
+            u_full: vec![Vector::ZERO; nodes],
+            f_full: vec![Vector::ZERO; nodes],
+            r: vec![0.0; unknowns],
+            branches: Vec::new(),
+        }
+    }
+}
+
+/// the nodal displacements of the unknowns `s`.
+fn expand(dofs: &[NodeDofs], s: &[Real], out: &mut [Vector]) {
+    for (u, d) in out.iter_mut().zip(dofs) {
+        *u = d.entries().iter().map(|&(r, c)| s[r as usize] * c).sum();
+    }
+}
+
+/// Δε = sym(Σ_k u_k ⊗ G_k) (eq 9 with displacements).
+fn strain<const N: usize>(grads: &[Vector; N], idx: &[u32; N], u: &[Vector]) -> PlaneTensor {
+    let (mut xx, mut yy, mut xy, mut yx) = (0.0, 0.0, 0.0, 0.0);
+    for k in 0..N {
+        let (v, g) = (u[idx[k] as usize], grads[k]);
+        xx += v.x * g.x;
+        yy += v.y * g.y;
+        xy += v.x * g.y;
+        yx += v.y * g.x;
+    }
+    PlaneTensor::new(xx, yy, 0.0, 0.5 * (xy + yx))
+}
+
+/// the plane-strain block of a tangent: rows and columns xx, yy, xy (storage places 0, 1, 3).
+fn plane_block(t: &Tangent) -> [[Real; 3]; 3] {
+    const AT: [usize; 3] = [0, 1, 3];
+    std::array::from_fn(|a| std::array::from_fn(|b| t[AT[a]][AT[b]]))
+}
+
+fn norm(v: &[Real]) -> Real {
+    v.iter().map(|x| x * x).sum::<Real>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use mpm_constitutive::{
+        ConeMatch, ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic,
+    };
+    use mpm_contact::Friction;
+    use mpm_grid::{Bilinear, RegularGrid};
+
+    use super::*;
+    use crate::generate::{Shape, fill};
+    use crate::particles::{NewParticle, Particles};
+    use crate::{Boundaries, SolverConfig};
+
+    const RHO: Real = 2000.0;
+    const G: Real = 9.81;
+
+    fn particles<St: Copy>(shape: &Shape, spacing: Real, state: St) -> Particles<St> {
+        let mut p = Particles::default();
+        for s in fill(shape, spacing) {
+            p.push(NewParticle::unstressed(s.position, Vector::ZERO, s.area, RHO, state));
+        }
+        p
+    }
+
+    fn walls(ground: Friction) -> Boundaries {
+        Boundaries {
+            ground: Some(ground),
+            left_wall: Some(Friction::Coulomb { mu: 0.0 }),
+            right_wall: Some(Friction::Coulomb { mu: 0.0 }),
+        }
+    }
+
+    /// An elastic layer H = 2 m deep on a rigid base between frictionless walls: σ_yy = −ρ g (H − y)
+    /// and σ_xx = σ_zz = ν/(1 − ν) σ_yy (K0, plane strain). Bilinear elements with 2 × 2 particles
+    /// per cell reproduce the 1D solution exactly at the nodes (the particles integrate the
+    /// linear shape functions exactly), so a cell's strain is the exact strain's mean over it:
+    /// the exact value at the cell's centre, which is what every particle of the cell carries.
+    /// Tolerance 1e-9 relative: the solve's 1e-10 residual and the LU's rounding.
+    #[test]
+    fn an_elastic_layer_between_frictionless_walls_is_at_rest_earth_pressure() {
+        let (h, depth, nu) = (0.25, 2.0, 0.3);
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(h), [4, 12]).unwrap();
+        let shape = Shape::Rectangle { min: Vector::ZERO, max: Vector::new(1.0, depth) };
+        let config = SolverConfig {
+            boundaries: walls(Friction::Fixed),
+            gravity: Vector::new(0.0, -G),
+            ..Default::default()
+        };
+        let elastic = LinearElastic::from_young_poisson(5e7, nu).unwrap();
+        let mut s =
+            Solver::new(Bilinear(grid), vec![elastic], particles(&shape, h / 2.0, ()), config)
+                .unwrap();
+        let report = s.solve_geostatic(&GeostaticSettings::default()).unwrap();
+        assert!(report.residual <= 1e-10, "{report:?}");
+        assert!(report.iterations <= 3, "a linear problem: {report:?}");
+        let k0 = nu / (1.0 - nu);
+        let p = s.particles();
+        for q in 0..p.len() {
+            let y_c = ((p.position[q].y / h).floor() + 0.5) * h;
+            let exact = -RHO * G * (depth - y_c);
+            let st = p.stress[q];
+            assert!(((st.yy - exact) / exact).abs() < 1e-9, "{q}: {} vs {exact}", st.yy);
+            assert!(((st.xx - k0 * exact) / exact).abs() < 1e-9, "{q}: {}", st.xx);
+            assert!(((st.zz - k0 * exact) / exact).abs() < 1e-9, "{q}: {}", st.zz);
+            assert!(st.xy.abs() < 1e-9 * exact.abs(), "{q}: {}", st.xy);
+            assert_eq!(p.velocity[q], Vector::ZERO);
+        }
+        // the ledger starts from the stored strain energy: no residual at t = 0.
+        assert!(s.energy().residual.abs() < 1e-9 * s.energy().strain, "{:?}", s.energy());
+    }
+
+    /// A block in the air, held by nothing, has no equilibrium: the solve says so (a named
+    /// error with the load factor), and the particles keep their stress-free state.
+    #[test]
+    fn a_body_no_boundary_holds_has_no_geostatic_state() {
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+        let shape = Shape::Rectangle { min: Vector::new(0.5, 0.5), max: Vector::new(1.5, 1.5) };
+        let elastic = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+        let config = SolverConfig { gravity: Vector::new(0.0, -G), ..Default::default() };
+        let mut s =
+            Solver::new(Bilinear(grid), vec![elastic], particles(&shape, 0.125, ()), config)
+                .unwrap();
+        let e = s.solve_geostatic(&GeostaticSettings::default()).unwrap_err();
+        let SolverError::InitialState { load_factor, .. } = &e else { panic!("{e}") };
+        assert_eq!(*load_factor, 0.0, "{e}");
+        assert!(s.particles().stress.iter().all(|t| *t == PlaneTensor::ZERO));
+    }
+
+    fn sand(phi: Real) -> DruckerPrager {
+        DruckerPrager::new(DruckerPragerParams {
+            young: 1e7,
+            poisson: 0.3,
+            cohesion: 0.0,
+            friction_angle_deg: phi,
+            dilatancy_angle_deg: 0.0,
+            hardening_modulus: 0.0,
+            mixing: 1.0,
+            cone_match: ConeMatch::PlaneStrain,
+        })
+        .unwrap()
+    }
+
+    /// a cohesionless slope of angle `beta` (degrees) on a rough base between two walls.
+    fn slope(beta: Real, phi: Real) -> Result<GeostaticReport, SolverError> {
+        let h = 0.1;
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(h), [40, 20]).unwrap();
+        let (height, toe) = (1.0, 1.0);
+        let crest = toe + height / beta.to_radians().tan();
+        let shape = Shape::Polygon {
+            vertices: vec![
+                Vector::new(toe, 0.0),
+                Vector::new(4.0, 0.0),
+                Vector::new(4.0, height),
+                Vector::new(crest, height),
+            ],
+        };
+        let config = SolverConfig {
+            boundaries: walls(Friction::Fixed),
+            gravity: Vector::new(0.0, -G),
+            ..Default::default()
+        };
+        let m = sand(phi);
+        let state = m.initial_state();
+        let mut s = Solver::new(Bilinear(grid), vec![m], particles(&shape, h / 2.0, state), config)
+            .unwrap();
+        let settings = GeostaticSettings { load_steps: 4, ..Default::default() };
+        let r = s.solve_geostatic(&settings)?;
+        // Every stress is admissible: a zero increment from it returns it to itself, to
+        // rounding (1e-12 of its size: a point exactly on the cone may take the cone branch
+        // for a residual of a few ulps).
+        let p = s.particles();
+        for q in 0..p.len() {
+            let (mut sigma, mut state) = (p.stress[q], p.state[q]);
+            s.materials()[0]
+                .update_plane(&mut sigma, &mut state, &PlaneTensor::ZERO, 1.0, None)
+                .unwrap();
+            let moved = (sigma - p.stress[q]).norm();
+            assert!(moved <= 1e-12 * p.stress[q].norm(), "particle {q}: {:?}", p.stress[q]);
+        }
+        Ok(r)
+    }
+
+    /// A cohesionless Drucker-Prager slope (φ = 35°, ψ = 0, plane-strain cone) of 25° stands:
+    /// Newton converges to the tolerance in every load step, most of the slope on its cone. One
+    /// of 50° has no equilibrium at any share of gravity (cohesionless: the failure does not
+    /// depend on the load's size), and the solve says so instead of returning a stress state.
+    #[test]
+    fn a_sand_slope_below_its_friction_angle_stands_and_one_above_it_fails() {
+        let stands = slope(25.0, 35.0).unwrap();
+        assert_eq!(stands.load_steps, 4, "{stands:?}");
+        assert!(stands.residual <= 1e-10, "{stands:?}");
+        assert!(stands.plastic_particles > stands.unknowns / 4, "{stands:?}");
+        assert!(stands.tied_nodes > 0, "the cut cells of the face: {stands:?}");
+        let fails = slope(50.0, 35.0).unwrap_err();
+        let SolverError::InitialState { load_factor, .. } = fails else { panic!("{fails}") };
+        assert!(load_factor < 0.01, "{fails}");
+    }
+}
