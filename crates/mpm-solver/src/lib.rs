@@ -61,7 +61,7 @@ pub use config::{
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
-pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration};
+pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleReport};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
 pub use solver::{BranchCounts, Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};
