@@ -130,6 +130,7 @@ fn variant(e: &RowError) -> &'static str {
         SolverError::StepTooLong { .. } => "StepTooLong",
         SolverError::Constitutive { .. } => "Constitutive",
         SolverError::MassSolve { .. } => "MassSolve",
+        SolverError::InitialState { .. } => "InitialState",
     }
 }
 

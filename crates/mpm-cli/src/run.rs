@@ -20,8 +20,11 @@ use mpm_scene::observed;
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
-use mpm_scene::{GridBuilt, Resolved, Scene, SceneError, ground_height, load_scene_str};
-use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
+use mpm_scene::{
+    GridBuilt, InitialState, InitialStateSummary, Resolved, Scene, SceneError, ground_height,
+    load_scene_str,
+};
+use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, SolverError, StepReport, Vector};
 use serde::{Deserialize, Serialize};
 
 use mpm_output::checkpoint::{self, CheckpointFile, History};
@@ -282,7 +285,16 @@ impl Job for RunJob<'_> {
                 (s, history, false)
             }
         };
+        let (initial, initial_error) = if fresh {
+            match initial_state(&mut solver, &r.initial_state, self.opts.quiet) {
+                Ok(summary) => (summary, None),
+                Err(e) => (None, Some(e)),
+            }
+        } else {
+            (None, None)
+        };
         let mut driver = Driver {
+            initial,
             scene,
             dir: self.out_dir.as_deref(),
             history,
@@ -323,7 +335,10 @@ impl Job for RunJob<'_> {
         }
         let session_steps0 = solver.step_count();
         let start = Instant::now();
-        let result = solver.run_until(r.end_time, &mut driver);
+        let result = match initial_error {
+            Some(e) => Err(e),
+            None => solver.run_until(r.end_time, &mut driver),
+        };
         let elapsed = start.elapsed().as_secs_f64();
         driver.progress.finish();
         driver.history.wall_time += elapsed;
@@ -404,6 +419,8 @@ fn alarm_message(h: &History, threshold: f64) -> Option<String> {
 }
 
 struct Driver<'a> {
+    /// what the initial-state stage did (a new run with `[initial_state]`).
+    initial: Option<InitialStateSummary>,
     scene: &'a Scene,
     dir: Option<&'a Path>,
     history: History,
@@ -414,6 +431,69 @@ struct Driver<'a> {
     io_error: Option<RunError>,
     /// why the driver stopped the run, when not on request.
     stop: Option<Stop>,
+}
+
+/// finds a new run's initial stresses as the scene asks (`[initial_state]`), timed and reported
+/// on stderr unless `quiet`; `Ok(None)` for a stress-free start.
+fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    solver: &mut Solver<M, S, N>,
+    how: &InitialState,
+    quiet: bool,
+) -> Result<Option<InitialStateSummary>, SolverError> {
+    let start = Instant::now();
+    let summary = match *how {
+        InitialState::None => return Ok(None),
+        InitialState::Implicit(settings) => {
+            let g = solver.solve_geostatic(&settings)?;
+            InitialStateSummary {
+                method: "implicit".into(),
+                load_steps: Some(g.load_steps),
+                iterations: Some(g.iterations),
+                residual: Some(g.residual),
+                residual_history: g.history.iter().map(|h| h.residual).collect(),
+                plastic_particles: Some(g.plastic_particles),
+                tied_nodes: Some(g.tied_nodes),
+                max_displacement: Some(g.max_displacement),
+                base_friction_ratio: Some(g.base_friction_ratio),
+                ..InitialStateSummary::default()
+            }
+        }
+        InitialState::GravityRamp { ramp, hold } => {
+            let r = solver.settle(ramp, hold)?;
+            InitialStateSummary {
+                method: "gravity_ramp".into(),
+                steps: Some(r.steps),
+                kinetic_energy: Some(r.kinetic_energy),
+                ..InitialStateSummary::default()
+            }
+        }
+    };
+    let summary = InitialStateSummary { wall_time_s: start.elapsed().as_secs_f64(), ..summary };
+    if !quiet {
+        let s = &summary;
+        match s.method.as_str() {
+            "implicit" => eprintln!(
+                "initial state (implicit): {} load step(s), {} Newton iterations, residual \
+                 {:.2e}, {} particles plastic, {} surface nodes tied, largest displacement \
+                 {:.3e} m, {:.2} s",
+                s.load_steps.unwrap_or(0),
+                s.iterations.unwrap_or(0),
+                s.residual.unwrap_or(0.0),
+                s.plastic_particles.unwrap_or(0),
+                s.tied_nodes.unwrap_or(0),
+                s.max_displacement.unwrap_or(0.0),
+                s.wall_time_s
+            ),
+            _ => eprintln!(
+                "initial state (gravity ramp): {} steps, kinetic energy left {:.3e} J/m \
+                 (zeroed), {:.2} s",
+                s.steps.unwrap_or(0),
+                s.kinetic_energy.unwrap_or(0.0),
+                s.wall_time_s
+            ),
+        }
+    }
+    Ok(Some(summary))
 }
 
 /// takes the solver's current state into the envelopes.
@@ -679,6 +759,7 @@ impl Driver<'_> {
                 observed::compare(o, &sim, last.front_x, last.tail_x)
             }),
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
+            initial_state: self.initial.clone(),
         }
     }
 

@@ -38,6 +38,46 @@ pub struct SceneFile {
     /// what to write.
     #[serde(default)]
     pub output: OutputSpec,
+    /// the stresses the run starts from (stress-free by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_state: Option<InitialStateSpec>,
+}
+
+/// How the initial stresses are found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InitialStateMethod {
+    /// stress-free, gravity at once (the paper's start).
+    #[default]
+    None,
+    /// one implicit quasi-static solve for equilibrium under gravity (`mpm_solver::geostatic`).
+    Implicit,
+    /// explicit steps with gravity ramped up and held, then the velocities zeroed.
+    GravityRamp,
+}
+
+/// `[initial_state]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialStateSpec {
+    /// `"none"` (default), `"implicit"` or `"gravity_ramp"`.
+    #[serde(default)]
+    pub method: InitialStateMethod,
+    /// implicit: load steps sharing gravity (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_steps: Option<i64>,
+    /// implicit: Newton iterations per load step (default 50).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_iterations: Option<i64>,
+    /// implicit: equilibrium tolerance ‖R‖/‖f_gravity‖ (default 1e-10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+    /// gravity_ramp: time over which gravity grows from zero (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ramp_time: Option<f64>,
+    /// gravity_ramp: time gravity is then held before the run starts (s, default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_time: Option<f64>,
 }
 
 /// Kind of background grid.

@@ -50,12 +50,13 @@ mod validate;
 pub use dispatch::{Job, SavedState, SceneModel, dispatch};
 pub use error::SceneError;
 pub use scene::{
-    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, MaterialsBuilt, Reference,
-    Resolved, ResolvedOutput, Scene, Seed, fnv1a, ground_height, segment_at,
+    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, InitialState, MaterialsBuilt,
+    Reference, Resolved, ResolvedOutput, Scene, Seed, fnv1a, ground_height, segment_at,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{
-    DtStats, EnergyReport, RunStatus, RunSummary, RunoutIndicators, RunoutMetrics, RunoutReport,
+    DtStats, EnergyReport, InitialStateSummary, RunStatus, RunSummary, RunoutIndicators,
+    RunoutMetrics, RunoutReport,
 };
 pub use validate::{load_scene_str, load_scene_str_in};
 

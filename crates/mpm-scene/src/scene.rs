@@ -130,6 +130,25 @@ pub struct Resolved {
     pub alarm: EnergyAlarm,
     /// most steps the run may take.
     pub max_steps: u64,
+    /// how the initial stresses are found.
+    pub initial_state: InitialState,
+}
+
+/// How a new run finds its initial stresses (`[initial_state]`); a resumed run has them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum InitialState {
+    /// stress-free.
+    #[default]
+    None,
+    /// `mpm_solver::Solver::solve_geostatic` with these settings.
+    Implicit(mpm_solver::GeostaticSettings),
+    /// `mpm_solver::Solver::settle`: gravity ramped over `ramp` seconds, held `hold` more.
+    GravityRamp {
+        /// ramp time (s)
+        ramp: f64,
+        /// hold time (s)
+        hold: f64,
+    },
 }
 
 /// Default `[solver] energy_alarm`: the largest |residual| / energy scale a run may reach

@@ -153,6 +153,39 @@ pub struct RunSummary {
     /// FNV-1a 64 hash (hex) of the final solver state's bytes (particles, clock, dissipation):
     /// equal hashes mean bit-identical runs.
     pub state_hash: String,
+    /// how the initial stresses were found (a new run with an `[initial_state]`; absent after
+    /// `mpm resume`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_state: Option<InitialStateSummary>,
+}
+
+/// What the initial-state stage of a run did (`[initial_state]`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InitialStateSummary {
+    /// `"implicit"` or `"gravity_ramp"`.
+    pub method: String,
+    /// its wall time (s).
+    pub wall_time_s: f64,
+    /// implicit: load steps that converged.
+    pub load_steps: Option<u32>,
+    /// implicit: Newton iterations (linear solves).
+    pub iterations: Option<u32>,
+    /// implicit: final ‖R‖ / ‖f_gravity‖.
+    pub residual: Option<f64>,
+    /// implicit: the residual after every Newton iteration, in order.
+    pub residual_history: Vec<f64>,
+    /// implicit: particles left on a plastic branch.
+    pub plastic_particles: Option<usize>,
+    /// implicit: poorly supported surface nodes tied to their neighbours.
+    pub tied_nodes: Option<usize>,
+    /// implicit: largest nodal displacement of the solve (m).
+    pub max_displacement: Option<f64>,
+    /// implicit: Σ tangential / Σ μ·normal reactions on the friction planes (≤ 1).
+    pub base_friction_ratio: Option<f64>,
+    /// gravity_ramp: explicit steps taken.
+    pub steps: Option<u64>,
+    /// gravity_ramp: kinetic energy left at its end and zeroed (J/m).
+    pub kinetic_energy: Option<f64>,
 }
 
 /// Runout metrics of `positions` (masses `mass`) over `ground`, with particle spacing `spacing`

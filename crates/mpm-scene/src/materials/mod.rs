@@ -24,14 +24,16 @@ pub use elastic::ElasticSpec;
 
 use mpm_constitutive::{
     ConstitutiveError, ConstitutiveModel, DpPerfectState, DruckerPrager, LinearElastic, MuI,
+    TangentModel,
 };
 use mpm_solver::Checkpoint;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 /// A constitutive model as a scene's run uses it: stored in checkpoints as one variant of
-/// [`SavedState`].
-pub trait SceneModel: ConstitutiveModel + Clone + std::fmt::Debug + 'static {
+/// [`SavedState`], with its consistent tangent for the implicit initial state
+/// (`[initial_state] method = "implicit"`).
+pub trait SceneModel: TangentModel + Clone + std::fmt::Debug + 'static {
     /// wraps a solver checkpoint for storage.
     fn wrap(c: Checkpoint<Self::State>) -> SavedState;
     /// unwraps a stored checkpoint of this model (`None` for another model).

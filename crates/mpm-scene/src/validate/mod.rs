@@ -3,7 +3,7 @@
 //!
 //! Order of checks: TOML syntax and types (serde) → solver settings → grid → materials → bodies
 //! (shape, inside the grid, no overlap) → boundaries → the solver configuration as a whole → the
-//! first Δt → output; each section has its module. The first problem found is reported; nothing
+//! first Δt → initial state → output; each section has its module. The first problem found is reported; nothing
 //! runs until the whole scene is consistent.
 //!
 //! A scene uses one constitutive model for all bodies (the solver is generic over it, with no
@@ -13,6 +13,7 @@
 mod bodies;
 mod boundaries;
 mod grid;
+mod initial_state;
 mod materials;
 mod output;
 mod polyline;
@@ -292,6 +293,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;
+    let initial_state = initial_state::build(ctx, f.initial_state.as_ref(), config.gravity_ramp)?;
     let output = output::build(
         ctx,
         &f.output,
@@ -315,5 +317,6 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         initial_dt,
         alarm: settings.alarm,
         max_steps: settings.max_steps,
+        initial_state,
     })
 }

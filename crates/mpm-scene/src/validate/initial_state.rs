@@ -1,0 +1,118 @@
+//! `[initial_state]`: how a new run finds its initial stresses (stress-free, one implicit
+//! solve, or an explicit gravity ramp), each method's fields checked against it.
+
+use mpm_solver::GeostaticSettings;
+
+use super::{Ctx, num};
+use crate::error::SceneError;
+use crate::file::{InitialStateMethod, InitialStateSpec};
+use crate::scene::InitialState;
+
+/// Checks `[initial_state]`; `gravity_ramp` is `[solver] gravity_ramp` (s).
+pub(super) fn build(
+    ctx: &Ctx<'_>,
+    spec: Option<&InitialStateSpec>,
+    gravity_ramp: f64,
+) -> Result<InitialState, SceneError> {
+    let Some(s) = spec else { return Ok(InitialState::None) };
+    let implicit_fields = [
+        ("load_steps", s.load_steps.is_some()),
+        ("max_iterations", s.max_iterations.is_some()),
+        ("tolerance", s.tolerance.is_some()),
+    ];
+    let ramp_fields =
+        [("ramp_time", s.ramp_time.is_some()), ("settle_time", s.settle_time.is_some())];
+    let foreign = |fields: &[(&str, bool)], why: &str| -> Result<(), SceneError> {
+        match fields.iter().find(|f| f.1) {
+            Some((name, _)) => Err(ctx.foreign(&format!("initial_state.{name}"), why)),
+            None => Ok(()),
+        }
+    };
+    if s.method != InitialStateMethod::None && gravity_ramp > 0.0 {
+        return Err(ctx.err(
+            "solver.gravity_ramp",
+            Some(num(gravity_ramp)),
+            "a gravity ramp during the run cannot follow an initial state already under gravity",
+            "gravity_ramp = 0 with an `[initial_state]`",
+            "remove `gravity_ramp`, or use `[initial_state] method = \"gravity_ramp\"`",
+        ));
+    }
+    match s.method {
+        InitialStateMethod::None => {
+            foreign(&implicit_fields, "method = \"none\"")?;
+            foreign(&ramp_fields, "method = \"none\"")?;
+            Ok(InitialState::None)
+        }
+        InitialStateMethod::Implicit => {
+            foreign(&ramp_fields, "they belong to method = \"gravity_ramp\"")?;
+            let d = GeostaticSettings::default();
+            let count = |name: &str, v: Option<i64>, default: u32, most: i64, fix: &str| match v {
+                None => Ok(default),
+                Some(n) if (1..=most).contains(&n) => Ok(n as u32),
+                Some(n) => Err(ctx.range(
+                    &format!("initial_state.{name}"),
+                    n as f64,
+                    &format!("1 ≤ {name} ≤ {most}"),
+                    fix,
+                )),
+            };
+            let load_steps = count(
+                "load_steps",
+                s.load_steps,
+                d.load_steps,
+                100_000,
+                "1 for an elastic material; 4–10 to follow a plastic loading path",
+            )?;
+            let max_iterations = count(
+                "max_iterations",
+                s.max_iterations,
+                d.max_iterations,
+                10_000,
+                "the default 50 is plenty for a state that exists",
+            )?;
+            let tolerance = s.tolerance.unwrap_or(d.tolerance);
+            if !(tolerance > 1e-15 && tolerance < 1.0) {
+                return Err(ctx.range(
+                    "initial_state.tolerance",
+                    tolerance,
+                    "1e-15 < tolerance < 1",
+                    "use the default 1e-10 (Newton reaches it in a few iterations)",
+                ));
+            }
+            Ok(InitialState::Implicit(GeostaticSettings {
+                load_steps,
+                max_iterations,
+                tolerance,
+                ..d
+            }))
+        }
+        InitialStateMethod::GravityRamp => {
+            foreign(&implicit_fields, "they belong to method = \"implicit\"")?;
+            let Some(ramp) = s.ramp_time else {
+                return Err(ctx.missing(
+                    "initial_state.ramp_time",
+                    "the gravity ramp's duration",
+                    "1.0",
+                ));
+            };
+            if !(ramp.is_finite() && ramp > 0.0 && ramp <= 1e4) {
+                return Err(ctx.range(
+                    "initial_state.ramp_time",
+                    ramp,
+                    "0 < ramp_time ≤ 1e4 (s)",
+                    "several periods of the body's slowest mode, e.g. 1.0",
+                ));
+            }
+            let hold = s.settle_time.unwrap_or(0.0);
+            if !(hold.is_finite() && (0.0..=1e4).contains(&hold)) {
+                return Err(ctx.range(
+                    "initial_state.settle_time",
+                    hold,
+                    "0 ≤ settle_time ≤ 1e4 (s)",
+                    "e.g. half the ramp time",
+                ));
+            }
+            Ok(InitialState::GravityRamp { ramp, hold })
+        }
+    }
+}
