@@ -10,6 +10,7 @@
 
 use std::ops::ControlFlow;
 
+pub mod geostatic;
 pub mod open_core;
 
 use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};

@@ -6,6 +6,7 @@ mod verification {
     pub mod bardenhagen2002;
     pub mod consistent_mass;
     pub mod floor;
+    pub mod geostatic;
     pub mod guards;
     pub mod kinks;
     pub mod objectivity;

@@ -18,8 +18,9 @@ use mpm_constitutive::{
     ConeMatch, ConstitutiveError, ConstitutiveModel, DpState, DruckerPrager, DruckerPragerParams,
     SymTensor,
 };
-use mpm_solver::{Contact, MassMatrix, Scheme};
+use mpm_solver::{Contact, GeostaticSettings, MassMatrix, Scheme, SolverError};
 use mpm_tests::abe2005::{eq21_displacement, eq21_distance, eq21_stop_time, eq22_travel};
+use mpm_tests::geostatic::SlopeResult;
 use mpm_tests::{
     Discretisation, FreeFall, ShapeKind, bar, free_fall, sliding_horizontal, sliding_inclined,
     swirl_momentum_error, vibrating_bar,
@@ -58,6 +59,10 @@ const BAR_REL: f64 = 0.01;
 /// Momentum balance with the consistent mass matrix: its 1e-13 solve tolerance plus the rounding
 /// of a few hundred nodal sums.
 const CONSISTENT_MOMENTUM_REL: f64 = 1e-12;
+
+/// The K0 layer's stresses, relative: the issue's 1e-6 (the discrete answer is exact; measured
+/// ~1e-13).
+const GEOSTATIC_K0_REL: f64 = 1e-6;
 
 const HEADER: [&str; 8] =
     ["case", "quantity", "reference", "source", "computed", "error", "tolerance", "result"];
@@ -423,6 +428,7 @@ pub fn run(quick: bool) -> Result<bool> {
         }
     }
     consistent_mass_rows(&mut rows, quick);
+    geostatic_rows(&mut rows);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
     let exact = (0..=1000)
         .map(|k| k as f64 * 0.05)
@@ -674,6 +680,73 @@ fn curve<S>(path: &[PathPoint<S>], f: impl Fn(&PathPoint<S>) -> (f64, f64)) -> V
 /// The consistent mass matrix (`[solver] mass = "consistent"`): on the vibrating bar its energy
 /// and period errors are below the lumped matrix's at the same resolution and Δt, and with no
 /// boundary it conserves momentum to rounding under every scheme.
+/// the geostatic initial state (`mpm_tests::geostatic`): the K0 layer's exact stresses, and a
+/// cohesionless slope that stands below its friction angle and fails above it.
+fn geostatic_rows(rows: &mut Rows) {
+    use mpm_tests::geostatic::{k0_layer, sand_slope};
+    let case = "elastic layer 2 m, ν 0.3, implicit initial state";
+    match k0_layer(2.0, 0.3) {
+        Ok(r) => {
+            rows.at_most(
+                (case, "max |σ_yy/σ_yy,exact − 1|"),
+                "−ρ g (H − y)",
+                "at rest under gravity (1e-6: the issue)",
+                r.vertical_error,
+                GEOSTATIC_K0_REL,
+                false,
+            );
+            rows.at_most(
+                (case, "max |σ_xx/σ_yy − ν/(1 − ν)|, σ_zz too"),
+                "K0 = ν/(1 − ν)",
+                "plane strain, laterally confined",
+                r.lateral_error,
+                GEOSTATIC_K0_REL,
+                false,
+            );
+        }
+        Err(e) => rows.failed(case, "run", &e),
+    }
+    let case = "sand slope 25°, φ 35°, c 0, implicit initial state";
+    match sand_slope(25.0, 35.0) {
+        Ok(r) => match r.outcome {
+            Ok(g) => {
+                rows.at_most(
+                    (case, "‖R‖/‖f_gravity‖"),
+                    "0 (equilibrium)",
+                    "Newton converges below φ",
+                    g.residual,
+                    GeostaticSettings::default().tolerance,
+                    false,
+                );
+                rows.at_most(
+                    (case, "max |Δσ| of a zero increment / |σ|"),
+                    "0 (on or inside the cone)",
+                    "no stress outside the yield surface",
+                    r.outside_cone,
+                    1e-12,
+                    false,
+                );
+            }
+            Err(e) => rows.failed(case, "solve", &e),
+        },
+        Err(e) => rows.failed(case, "run", &e),
+    }
+    let case = "sand slope 50°, φ 35°, c 0, implicit initial state";
+    match sand_slope(50.0, 35.0) {
+        Ok(SlopeResult { outcome: Err(SolverError::InitialState { load_factor, .. }), .. }) => rows
+            .at_most(
+                (case, "share of gravity in equilibrium"),
+                "0 (no equilibrium: fails, exit 3)",
+                "steeper than φ: reported, not solved",
+                load_factor,
+                0.01,
+                false,
+            ),
+        Ok(r) => rows.failed(case, "report the failure", &format!("{:?}", r.outcome)),
+        Err(e) => rows.failed(case, "run", &e),
+    }
+}
+
 fn consistent_mass_rows(rows: &mut Rows, quick: bool) {
     let mut bars = vec![(ShapeKind::Bilinear, 1.0)];
     if !quick {
