@@ -116,3 +116,43 @@ pub(super) fn build(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::InitialState;
+    use crate::scenes::embedded_scene;
+    use crate::validate::load_scene_str;
+    use crate::{Scene, SceneError};
+
+    fn flume_with(section: &str) -> Result<Scene, SceneError> {
+        let text = format!("{}\n[initial_state]\n{section}\n", embedded_scene("flume").unwrap());
+        load_scene_str(&text, "t.toml")
+    }
+
+    /// Each method takes its own fields; another's, a missing ramp time or a count out of range
+    /// is refused at its line, as is a run-time gravity ramp beside an initial state.
+    #[test]
+    fn each_method_takes_only_its_own_fields() {
+        let s = flume_with("method = \"implicit\"\nload_steps = 4").unwrap();
+        assert!(matches!(s.resolved().initial_state, InitialState::Implicit(g) if g.load_steps == 4));
+        let s = flume_with("method = \"gravity_ramp\"\nramp_time = 0.5").unwrap();
+        assert_eq!(s.resolved().initial_state, InitialState::GravityRamp { ramp: 0.5, hold: 0.0 });
+        for (section, path) in [
+            ("method = \"implicit\"\nramp_time = 1.0", "initial_state.ramp_time"),
+            ("method = \"gravity_ramp\"", "initial_state.ramp_time"),
+            ("method = \"gravity_ramp\"\nramp_time = 1.0\ntolerance = 1e-8", "initial_state.tolerance"),
+            ("method = \"implicit\"\nload_steps = 0", "initial_state.load_steps"),
+            ("method = \"implicit\"\ntolerance = 2.0", "initial_state.tolerance"),
+        ] {
+            let e = flume_with(section).unwrap_err();
+            assert_eq!(e.path, path, "{section}: {e}");
+            assert!(e.line.is_some(), "{e}");
+        }
+        let ramped = embedded_scene("flume")
+            .unwrap()
+            .replace("end_time = 3.0", "end_time = 3.0\ngravity_ramp = 0.2");
+        let text = format!("{ramped}\n[initial_state]\nmethod = \"implicit\"\n");
+        let e = load_scene_str(&text, "t.toml").unwrap_err();
+        assert_eq!(e.path, "solver.gravity_ramp", "{e}");
+    }
+}
