@@ -42,7 +42,9 @@
 //! each correction is damped by a backtracking line search on ‖R‖. A load step that does not
 //! converge within `max_iterations`, or whose nodes move more than a cell (no small-strain
 //! equilibrium: a material that cannot stand, or a body no boundary holds), is retried with
-//! half the load increment, at most `max_cutbacks` times in a row; then the solve fails with the
+//! half the load increment, at most `max_cutbacks` times in a row (and within a budget of
+//! `max_iterations × (load_steps + 2 max_cutbacks + 2)` iterations in all, so that a state
+//! reachable only in ever smaller steps cannot creep on for ever); then the solve fails with the
 //! last load factor in equilibrium, which is a gravity-increase factor of safety in disguise.
 //!
 //! A zero tangent (a cohesionless point returned to the apex of its cone) or an hourglass mode
@@ -351,7 +353,11 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 Err(Failed { cause }) => {
                     halvings += 1;
                     report.cutbacks += 1;
-                    if halvings > settings.max_cutbacks {
+                    // Bounded work: a state that converges only in ever smaller steps, each
+                    // failing once at twice its size, would otherwise creep on for ever.
+                    let budget = settings.max_iterations
+                        * (settings.load_steps + 2 * settings.max_cutbacks + 2);
+                    if halvings > settings.max_cutbacks || report.iterations > budget {
                         restore(self);
                         return Err(SolverError::InitialState {
                             load_factor: lambda,

@@ -134,13 +134,18 @@ mod tests {
     #[test]
     fn each_method_takes_only_its_own_fields() {
         let s = flume_with("method = \"implicit\"\nload_steps = 4").unwrap();
-        assert!(matches!(s.resolved().initial_state, InitialState::Implicit(g) if g.load_steps == 4));
+        assert!(
+            matches!(s.resolved().initial_state, InitialState::Implicit(g) if g.load_steps == 4)
+        );
         let s = flume_with("method = \"gravity_ramp\"\nramp_time = 0.5").unwrap();
         assert_eq!(s.resolved().initial_state, InitialState::GravityRamp { ramp: 0.5, hold: 0.0 });
         for (section, path) in [
             ("method = \"implicit\"\nramp_time = 1.0", "initial_state.ramp_time"),
             ("method = \"gravity_ramp\"", "initial_state.ramp_time"),
-            ("method = \"gravity_ramp\"\nramp_time = 1.0\ntolerance = 1e-8", "initial_state.tolerance"),
+            (
+                "method = \"gravity_ramp\"\nramp_time = 1.0\ntolerance = 1e-8",
+                "initial_state.tolerance",
+            ),
             ("method = \"implicit\"\nload_steps = 0", "initial_state.load_steps"),
             ("method = \"implicit\"\ntolerance = 2.0", "initial_state.tolerance"),
         ] {
