@@ -61,14 +61,15 @@ use mpm_grid::ShapeFunctions;
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
 use crate::solver::Solver;
+use crate::stages::grid::held_planes;
 
 /// Relative shift of the stiffness matrix's diagonal (module docs): 1e-8 of the elastic diagonal
 /// keeps K regular where a tangent vanishes, while a linear problem still converges by a factor
 /// of about 1e-8 × the condition number per iteration (two iterations at the K0 layer's size).
 pub const DIAGONAL_SHIFT: Real = 1e-8;
 
-/// A point whose tangent has a diagonal entry below this share of its P-wave modulus (a
-/// cohesionless point returned to its cone's apex has none at all) gets this share added to
+/// A point whose tangent has no entry above this share of its P-wave modulus in size (a
+/// cohesionless point returned to its cone's apex has a zero tangent) gets this share added to
 /// its diagonal in K: the node it alone supports then moves a bounded amount and its particles
 /// are compressed back onto the cone at the next iteration, instead of the node flying off with
 /// only the diagonal shift to hold it. It changes the iteration, not its converged answer.
@@ -251,26 +252,33 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 expected: "an initial state is solved before the first step",
             });
         }
+        if self.config.periodic.is_some() {
+            return Err(SolverError::Incompatible {
+                setting: "initial_state",
+                with: "periodic",
+                reason: "the implicit solve does not pair periodic columns; start stress-free",
+            });
+        }
         self.locate()?;
         self.detect_contact(0.0);
+        // m_i (eq 1), as every step sums it; f^ext = m_i g at full gravity.
+        self.p2g_mass_velocity();
         let nodes = self.scratch.active.len();
         let (dofs, unknowns, holds, ties) = self.node_dofs();
         let g = self.config.gravity;
+        let f_grav: Vec<Vector> = self.scratch.mass.iter().map(|&m| m * g).collect();
 
-        // f^ext at full gravity, and each node's elastic stiffness scale for the shift.
-        let mut f_grav = vec![Vector::ZERO; nodes];
+        // each node's elastic stiffness scale, for the shift.
         let mut k_scale = vec![0.0; nodes];
         {
             let p = &self.particles;
             let sc = &self.scratch;
             for q in 0..p.len() {
-                let (w, gr) =
-                    (self.shape.weights(&sc.factors[q]), self.shape.gradients(&sc.factors[q]));
+                let gr = self.shape.gradients(&sc.factors[q]);
                 let modulus = self.p_modulus[usize::from(p.material[q])];
                 for k in 0..N {
-                    let i = sc.node_index[q][k] as usize;
-                    f_grav[i] += p.mass[q] * w[k] * g;
-                    k_scale[i] += p.volume[q] * modulus * gr[k].length_squared();
+                    k_scale[sc.node_index[q][k] as usize] +=
+                        p.volume[q] * modulus * gr[k].length_squared();
                 }
             }
         }
@@ -355,9 +363,11 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     report.cutbacks += 1;
                     // Bounded work: a state that converges only in ever smaller steps, each
                     // failing once at twice its size, would otherwise creep on for ever.
-                    let budget = settings.max_iterations
-                        * (settings.load_steps + 2 * settings.max_cutbacks + 2);
-                    if halvings > settings.max_cutbacks || report.iterations > budget {
+                    let budget = u64::from(settings.max_iterations)
+                        * (u64::from(settings.load_steps)
+                            + 2 * u64::from(settings.max_cutbacks)
+                            + 2);
+                    if halvings > settings.max_cutbacks || u64::from(report.iterations) > budget {
                         restore(self);
                         return Err(SolverError::InitialState {
                             load_factor: lambda,
@@ -377,12 +387,12 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         report.max_displacement = total_u.iter().map(|u| u.length()).fold(0.0, Real::max);
         report.plastic_particles = work.branches.iter().filter(|b| **b != Branch::ELASTIC).count();
 
-        // The reactions against the friction laws (module docs).
-        self.internal_forces(&mut work.f_full);
+        // The reactions against the friction laws (module docs): R_i = −(f^ext − f^int).
+        self.p2g_internal_force();
         let (mut tangential, mut capacity) = (0.0, 0.0);
         for b in &self.scratch.boundary {
             let i = b.node as usize;
-            let reaction = -(f_grav[i] - work.f_full[i]);
+            let reaction = -(f_grav[i] + self.scratch.force[i]);
             for plane in self.scratch.node_planes[b.planes()].iter().filter(|p| p.held) {
                 if let Friction::Coulomb { mu } = plane.wall.boundary().friction() {
                     if mu > 0.0 && matches!(holds[i], Hold::Fixed) {
@@ -559,34 +569,17 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             p.state[q] = state;
             work.branches[q] = rep.branch;
         }
-        self.internal_forces(&mut work.f_full);
+        self.p2g_internal_force();
         let out = &mut work.r;
         out.clear();
         out.resize(s.len(), 0.0);
         for (i, d) in dofs.iter().enumerate() {
-            let r_i = target * f_grav[i] - work.f_full[i];
+            let r_i = target * f_grav[i] + self.scratch.force[i];
             for &(r, c) in d.entries() {
                 out[r as usize] += c.dot(r_i);
             }
         }
         Ok(largest)
-    }
-
-    /// f_i^int = Σ_p V_p σ_p G_ip at the particles' current stresses, into `out`.
-    fn internal_forces(&self, out: &mut Vec<Vector>) {
-        let sc = &self.scratch;
-        let p = &self.particles;
-        out.clear();
-        out.resize(sc.active.len(), Vector::ZERO);
-        for q in 0..p.len() {
-            let gr = self.shape.gradients(&sc.factors[q]);
-            let s = p.stress[q];
-            for k in 0..N {
-                let g = gr[k];
-                out[sc.node_index[q][k] as usize] +=
-                    p.volume[q] * Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y);
-            }
-        }
     }
 
     /// solves K δ = R (reduced) with the tangents at the current increment.
@@ -676,12 +669,9 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         let sc = &self.scratch;
         let nodes = sc.active.len();
         let mut holds = vec![Hold::Free; nodes];
+        let mut buf = Vec::new();
         for b in &sc.boundary {
-            let planes: Vec<_> = sc.node_planes[b.planes()]
-                .iter()
-                .filter(|p| p.held)
-                .map(|p| *p.wall.boundary())
-                .collect();
+            let planes = held_planes(&mut buf, &sc.node_planes[b.planes()]);
             if planes.is_empty() {
                 continue;
             }
@@ -706,13 +696,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             holds[i] = if sticks || !one_plane { Hold::Fixed } else { Hold::Roller(n0) };
         }
         // Poorly supported free nodes follow their well-supported neighbours (module docs).
-        let mut mass = vec![0.0; nodes];
-        for q in 0..self.particles.len() {
-            let w = self.shape.weights(&sc.factors[q]);
-            for k in 0..N {
-                mass[sc.node_index[q][k] as usize] += self.particles.mass[q] * w[k];
-            }
-        }
+        let mass = &sc.mass;
         let heaviest = mass.iter().copied().fold(0.0, Real::max);
         let poor = |i: usize| matches!(holds[i], Hold::Free) && mass[i] < TIE_RATIO * heaviest;
         let mut dofs = vec![NodeDofs::default(); nodes];
@@ -843,8 +827,6 @@ struct Work {
     s: Vec<Real>,
     /// ... and at the nodes.
     u_full: Vec<Vector>,
-    /// f^int at the nodes.
-    f_full: Vec<Vector>,
     /// the reduced residual.
     r: Vec<Real>,
     /// each particle's branch at its last update.
@@ -856,7 +838,6 @@ impl Work {
         Self {
             s: vec![0.0; unknowns],
             u_full: vec![Vector::ZERO; nodes],
-            f_full: vec![Vector::ZERO; nodes],
             r: vec![0.0; unknowns],
             branches: Vec::new(),
         }

@@ -8,11 +8,13 @@ use crate::error::SceneError;
 use crate::file::{InitialStateMethod, InitialStateSpec};
 use crate::scene::InitialState;
 
-/// Checks `[initial_state]`; `gravity_ramp` is `[solver] gravity_ramp` (s).
+/// Checks `[initial_state]`; `gravity_ramp` is `[solver] gravity_ramp` (s), `periodic` whether
+/// the scene has periodic sides.
 pub(super) fn build(
     ctx: &Ctx<'_>,
     spec: Option<&InitialStateSpec>,
     gravity_ramp: f64,
+    periodic: bool,
 ) -> Result<InitialState, SceneError> {
     let Some(s) = spec else { return Ok(InitialState::None) };
     let implicit_fields = [
@@ -45,6 +47,15 @@ pub(super) fn build(
         }
         InitialStateMethod::Implicit => {
             foreign(&ramp_fields, "they belong to method = \"gravity_ramp\"")?;
+            if periodic {
+                return Err(ctx.err(
+                    "initial_state.method",
+                    Some("\"implicit\"".into()),
+                    "the implicit solve does not pair the columns of periodic sides",
+                    "\"none\" or \"gravity_ramp\" with `[boundaries] periodic = true`",
+                    "use method = \"gravity_ramp\"",
+                ));
+            }
             let d = GeostaticSettings::default();
             let count = |name: &str, v: Option<i64>, default: u32, most: i64, fix: &str| match v {
                 None => Ok(default),

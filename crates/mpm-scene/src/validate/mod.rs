@@ -293,7 +293,12 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;
-    let initial_state = initial_state::build(ctx, f.initial_state.as_ref(), config.gravity_ramp)?;
+    let initial_state = initial_state::build(
+        ctx,
+        f.initial_state.as_ref(),
+        config.gravity_ramp,
+        config.periodic.is_some(),
+    )?;
     let output = output::build(
         ctx,
         &f.output,

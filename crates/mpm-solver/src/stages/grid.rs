@@ -23,7 +23,7 @@ use crate::math::{Real, Vector};
 use crate::solver::{NodePlane, Solver};
 
 /// the planes of `planes` that hold their node this step, gathered into `buf` for the contact law.
-fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {
+pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {
     buf.clear();
     buf.extend(planes.iter().filter(|p| p.held).map(|p| *p.wall.boundary()));
     buf

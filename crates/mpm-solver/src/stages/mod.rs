@@ -1,7 +1,7 @@
 //! The stages of one step, each an `impl` block on [`crate::Solver`] in its own file.
 
 mod g2p;
-mod grid;
+pub(crate) mod grid;
 mod locate;
 pub(crate) mod mass;
 pub(crate) mod p2g;

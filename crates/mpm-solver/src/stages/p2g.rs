@@ -79,6 +79,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.scatter::<false, false, true, false>(0.0, g);
     }
 
+    /// −f_i^int = −Σ_p V_p σ_p · G_ip alone (no gravity) into `scratch.force`: the implicit
+    /// initial state's internal force (`geostatic.rs`), summed as every step sums it.
+    pub(crate) fn p2g_internal_force(&mut self) {
+        self.scatter::<false, false, true, false>(0.0, Vector::ZERO);
+    }
+
     /// the block scatter of the module docs, forming m_i (`MASS`; else the stored m_i divides
     /// the momentum), q_i and v_i = q_i / m_i (`MOMENTUM`) and f_i (`FORCE`). q_i sums
     /// m_p S_ip v_p, or with `APIC` m_p S_ip (v_p + C_p (x_i − x_p)), the particle positions taken
