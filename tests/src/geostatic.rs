@@ -86,6 +86,8 @@ pub struct SlopeResult {
     /// max over the particles of the stress change a zero strain increment makes (relative to
     /// the stress): 0 to rounding for a state on or inside the yield cone.
     pub outside_cone: f64,
+    /// the bits of every particle's stress (xx, yy, zz, xy), for bit-identity checks.
+    pub stress_bits: Vec<[u64; 4]>,
 }
 
 /// A cohesionless Drucker-Prager slope (E = 10 MPa, ν = 0.3, friction angle `phi`, ψ = 0,
@@ -131,5 +133,6 @@ pub fn sand_slope(beta: f64, phi: f64) -> Result<SlopeResult, CaseError> {
             outside_cone = outside_cone.max((sigma - *st).norm() / st.norm());
         }
     }
-    Ok(SlopeResult { outcome, outside_cone })
+    let stress_bits = p.stress.iter().map(|t| [t.xx, t.yy, t.zz, t.xy].map(f64::to_bits)).collect();
+    Ok(SlopeResult { outcome, outside_cone, stress_bits })
 }

@@ -44,3 +44,14 @@ fn a_sand_slope_below_its_friction_angle_stands_and_one_above_it_fails() {
     // the failed solve left the particles as they were: stress-free
     assert_eq!(fails.outside_cone, 0.0);
 }
+
+/// The solve gives the same bits on one thread as on two (its sums run through the step's
+/// deterministic block scatter; assembly and factorisation are serial).
+#[test]
+fn the_geostatic_state_is_bit_identical_with_one_and_two_threads() {
+    let on = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| sand_slope(25.0, 35.0).unwrap().stress_bits)
+    };
+    assert_eq!(on(1), on(2));
+}
