@@ -962,4 +962,41 @@ mod tests {
         assert_eq!(*load_factor, 0.0, "{e}");
         assert!(s.particles().stress.iter().all(|t| *t == PlaneTensor::ZERO));
     }
+
+    /// An elastic block on a Coulomb floor under gravity tilted by θ = 30° (a block on a 30°
+    /// slope): the floor holds it only where μ ≥ tan θ. The reactions sum to the weight, so the
+    /// base's friction ratio Σ|T| / Σ μN is tan θ / μ when every tangential reaction points down
+    /// the slope, as here (measured 2.4e-14 off; 1e-9 allows the solve's residual).
+    #[test]
+    fn a_block_on_a_coulomb_base_stands_only_where_its_friction_holds_it() {
+        let theta = 30_f64.to_radians();
+        let run = |mu: Real| {
+            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [12, 8]).unwrap();
+            let shape = Shape::Rectangle { min: Vector::new(1.0, 0.0), max: Vector::new(2.0, 0.5) };
+            let config = SolverConfig {
+                boundaries: Boundaries {
+                    ground: Some(Friction::Coulomb { mu }),
+                    ..Default::default()
+                },
+                gravity: G * Vector::new(theta.sin(), -theta.cos()),
+                ..Default::default()
+            };
+            let elastic = LinearElastic::from_young_poisson(1e7, 0.3).unwrap();
+            let mut s =
+                Solver::new(Bilinear(grid), vec![elastic], particles(&shape, 0.125, ()), config)
+                    .unwrap();
+            s.solve_geostatic(&GeostaticSettings::default())
+        };
+        let mu = 40_f64.to_radians().tan();
+        let r = run(mu).unwrap();
+        let least = theta.tan() / mu;
+        assert!(
+            (r.base_friction_ratio / least - 1.0).abs() <= 1e-9,
+            "{} vs {least}: {r:?}",
+            r.base_friction_ratio
+        );
+        let e = run(20_f64.to_radians().tan()).unwrap_err();
+        let SolverError::InitialState { cause, .. } = &e else { panic!("{e}") };
+        assert!(cause.contains("slide as a whole"), "{e}");
+    }
 }
