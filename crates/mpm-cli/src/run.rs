@@ -486,7 +486,7 @@ fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
             ),
             _ => eprintln!(
                 "initial state (gravity ramp): {} steps, kinetic energy left {:.3e} J/m \
-                 (zeroed), {:.2} s",
+                 (dropped), {:.2} s",
                 s.steps.unwrap_or(0),
                 s.kinetic_energy.unwrap_or(0.0),
                 s.wall_time_s

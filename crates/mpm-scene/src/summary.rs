@@ -184,7 +184,7 @@ pub struct InitialStateSummary {
     pub base_friction_ratio: Option<f64>,
     /// gravity_ramp: explicit steps taken.
     pub steps: Option<u64>,
-    /// gravity_ramp: kinetic energy left at its end and zeroed (J/m).
+    /// gravity_ramp: kinetic energy the ramp left at its end, dropped (J/m).
     pub kinetic_energy: Option<f64>,
 }
 

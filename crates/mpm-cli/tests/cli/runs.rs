@@ -438,3 +438,41 @@ fn a_run_compared_with_an_observed_deposit_reports_its_errors_and_overlap() {
         std::fs::remove_dir_all(&d).unwrap();
     }
 }
+
+/// `[initial_state] method = "implicit"`: a block resting on the floor gets its geostatic state,
+/// keeps the velocity its body was given (it slides), and summary.json says what the solve did;
+/// a block in the air has none, and the run stops as an instability does (exit code 3), with
+/// the summary and the first frame written.
+#[test]
+fn the_implicit_initial_state_runs_before_the_first_step_and_its_failure_is_an_instability() {
+    let implicit = |name: &str, end: f64| {
+        short(name, end)
+            .modified(|f| {
+                f.initial_state = Some(mpm_cli::scene::InitialStateSpec {
+                    method: mpm_cli::scene::InitialStateMethod::Implicit,
+                    ..Default::default()
+                })
+            })
+            .unwrap()
+    };
+    let dir = temp_dir("implicit_sliding");
+    let summary = run_scene(&implicit("sliding_horizontal", 0.05), &opts(&dir)).unwrap();
+    assert_eq!(summary.status, RunStatus::Completed);
+    let init = summary.initial_state.expect("reported");
+    assert_eq!(init.method, "implicit");
+    assert!(init.residual.unwrap() <= 1e-10, "{init:?}");
+    // the block was thrown at 10 m/s and still slides (eq 21: 10 − 0.3 g t)
+    assert!(summary.energy.kinetic > 0.5 * 1000.0 * 9.0 * 9.0, "{:?}", summary.energy);
+
+    let dir = temp_dir("implicit_unsupported");
+    match run_scene(&implicit("free_fall", 0.02), &opts(&dir)) {
+        // (the `mpm` binary maps RunError::Solver to exit code 3)
+        Err(e @ RunError::Solver { .. }) => {
+            assert!(e.to_string().contains("implicit initial state"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let json = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(json.contains("\"failed\"") && json.contains("implicit initial state"), "{json}");
+    assert!(dir.join("frames/particles_000000.vtp").exists());
+}
