@@ -677,9 +677,6 @@ fn curve<S>(path: &[PathPoint<S>], f: impl Fn(&PathPoint<S>) -> (f64, f64)) -> V
     path.iter().step_by(every).chain(path.last()).map(f).collect()
 }
 
-/// The consistent mass matrix (`[solver] mass = "consistent"`): on the vibrating bar its energy
-/// and period errors are below the lumped matrix's at the same resolution and Δt, and with no
-/// boundary it conserves momentum to rounding under every scheme.
 /// the geostatic initial state (`mpm_tests::geostatic`): the K0 layer's exact stresses, and a
 /// cohesionless slope that stands below its friction angle and fails above it.
 fn geostatic_rows(rows: &mut Rows) {
@@ -747,6 +744,9 @@ fn geostatic_rows(rows: &mut Rows) {
     }
 }
 
+/// The consistent mass matrix (`[solver] mass = "consistent"`): on the vibrating bar its energy
+/// and period errors are below the lumped matrix's at the same resolution and Δt, and with no
+/// boundary it conserves momentum to rounding under every scheme.
 fn consistent_mass_rows(rows: &mut Rows, quick: bool) {
     let mut bars = vec![(ShapeKind::Bilinear, 1.0)];
     if !quick {

@@ -335,6 +335,16 @@ impl Job for RunJob<'_> {
         }
         let session_steps0 = solver.step_count();
         let start = Instant::now();
+        // An error of the initial state's explicit ramp names a step of the ramp, not of the run.
+        let during_ramp =
+            initial_error.is_some() && matches!(r.initial_state, InitialState::GravityRamp { .. });
+        let describe = |e: &SolverError| {
+            if during_ramp {
+                format!("initial state (gravity ramp, before the run): {e}")
+            } else {
+                e.to_string()
+            }
+        };
         let result = match initial_error {
             Some(e) => Err(e),
             None => solver.run_until(r.end_time, &mut driver),
@@ -348,7 +358,7 @@ impl Job for RunJob<'_> {
             return Err(e);
         }
         let (status, error) = match (&result, driver.stop) {
-            (Err(e), _) => (RunStatus::Failed, Some(e.to_string())),
+            (Err(e), _) => (RunStatus::Failed, Some(describe(e))),
             (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
                 RunStatus::StepLimit,
                 Some(format!(
@@ -398,7 +408,7 @@ impl Job for RunJob<'_> {
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
         }
         match result {
-            Err(e) => Err(RunError::Solver { message: e.to_string(), summary: Box::new(summary) }),
+            Err(e) => Err(RunError::Solver { message: describe(&e), summary: Box::new(summary) }),
             Ok(_) => Ok(summary),
         }
     }
@@ -453,6 +463,7 @@ fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
                 residual_history: g.history.iter().map(|h| h.residual).collect(),
                 plastic_particles: Some(g.plastic_particles),
                 tied_nodes: Some(g.tied_nodes),
+                released_planes: Some(g.released_planes),
                 max_displacement: Some(g.max_displacement),
                 base_friction_ratio: Some(g.base_friction_ratio),
                 ..InitialStateSummary::default()

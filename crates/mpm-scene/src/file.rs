@@ -52,7 +52,8 @@ pub enum InitialStateMethod {
     None,
     /// one implicit quasi-static solve for equilibrium under gravity (`mpm_solver::geostatic`).
     Implicit,
-    /// explicit steps with gravity ramped up and held, then the velocities zeroed.
+    /// explicit steps from rest with gravity ramped up and held; then the bodies get their own
+    /// velocities back.
     GravityRamp,
 }
 

@@ -178,6 +178,8 @@ pub struct InitialStateSummary {
     pub plastic_particles: Option<usize>,
     /// implicit: poorly supported surface nodes tied to their neighbours.
     pub tied_nodes: Option<usize>,
+    /// implicit: boundary planes let go because they would have pulled their node.
+    pub released_planes: Option<usize>,
     /// implicit: largest nodal displacement of the solve (m).
     pub max_displacement: Option<f64>,
     /// implicit: Σ tangential / Σ μ·normal reactions on the friction planes (≤ 1).

@@ -189,4 +189,20 @@ pub enum SolverError {
         /// why the last attempt failed
         cause: String,
     },
+    /// The implicit initial state is in equilibrium only with its base stuck beyond the base's
+    /// friction: the body would slide as a whole.
+    #[error(
+        "implicit initial state: the material is in equilibrium only on a stuck base: the \
+         tangential reactions on a friction plane sum to {tangential:.4e} N/m, {ratio:.3} times \
+         what its friction holds ({capacity:.4e} N/m); the body would slide as a whole (a \
+         retaining wall or gate, or a rougher base, holds it)"
+    )]
+    SlidingBase {
+        /// |Σ tangential| / μ Σ normal reaction on the worst plane
+        ratio: f64,
+        /// |Σ tangential reaction| on it (N/m)
+        tangential: f64,
+        /// μ Σ normal reaction on it (N/m)
+        capacity: f64,
+    },
 }

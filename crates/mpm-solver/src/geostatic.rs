@@ -10,7 +10,8 @@
 //!   u in place of v Δt), tension positive.
 //! - λ: the load factor, the share of gravity applied; f_i^ext = λ Σ_p m_p S_ip g (eq 3).
 //! - f_i^int = Σ_p V_p σ_p G_ip (eq 2 with its sign), R = f^ext − f^int: the out-of-balance
-//!   force, zero at equilibrium. Its norm is measured against ‖f^ext‖ at λ = 1.
+//!   force, zero at equilibrium. Its norm over the unknowns (free components) is measured
+//!   against that of f^ext at λ = 1 over the same unknowns: the gravity load the solve moves.
 //! - D_p: the 3 × 3 plane-strain block (rows and columns xx, yy, xy with tensor shear) of the
 //!   model's consistent tangent ([`TangentModel::consistent_tangent`]) at the load step's start
 //!   state and the current increment; K_ij = Σ_p V_p F_ipᵀ D_p B_jp with B_jp the strain of a
@@ -23,12 +24,18 @@
 //! - a frictionless plane fixes the normal component u·n = 0 (a roller); two planes of different
 //!   normals (a corner) fix the node;
 //! - a plane with friction (Coulomb μ > 0, rough, fixed) fixes the node (stuck). Afterwards the
-//!   reactions are checked against the friction law: where the sum of the tangential reactions
-//!   on the Coulomb planes exceeds μ times the sum of their normal reactions the material would
-//!   slide as a whole, and the solve fails (`SlidingBase`);
+//!   reactions are checked against the friction law: where, on one Coulomb plane, the sum of the
+//!   tangential reactions (as vectors) exceeds μ times the sum of the normal ones, the material
+//!   would slide as a whole, and the solve fails (`SolverError::SlidingBase`);
 //! - a ghost node of a wide stencil (uGIMP, B-spline) mirrors its image's normal displacement
 //!   as in the explicit run: u_g·n = −u_image·n, its tangential part free on a frictionless plane
-//!   and zero otherwise, u_g = −u_image on a fixed plane.
+//!   held by no other plane and zero otherwise, u_g = −u_image on a fixed plane. Its normal
+//!   force goes to its wall, not to its image (the grid solve gives the image none of it);
+//! - planes hold one way, as in the grid solve: a plane (other than a fixed one) that would
+//!   have to pull its node lets it go, and the solve starts again without it.
+//!
+//! So the state found is the explicit run's own equilibrium: its steps from it keep the
+//! material at rest to rounding (tested with bilinear and B-spline functions).
 //!
 //! The free components are the unknowns (a node on an inclined frictionless plane has one, along
 //! the plane): the system is K reduced to them, assembled as triplets and factorised with faer's
@@ -46,6 +53,10 @@
 //! `max_iterations × (load_steps + 2 max_cutbacks + 2)` iterations in all, so that a state
 //! reachable only in ever smaller steps cannot creep on for ever); then the solve fails with the
 //! last load factor in equilibrium, which is a gravity-increase factor of safety in disguise.
+//!
+//! Poorly supported nodes ([`TIE_RATIO`]) are tied to their neighbours only when the state
+//! has no equilibrium without (the first load step fails): the ties leave those nodes' own
+//! forces unbalanced, which the explicit run then feels.
 //!
 //! A zero tangent (a cohesionless point returned to the apex of its cone) or an hourglass mode
 //! of a cell with few particles would make K singular: a shift of [`DIAGONAL_SHIFT`] times the
@@ -97,7 +108,7 @@ pub struct GeostaticSettings {
     pub load_steps: u32,
     /// Newton iterations allowed per load step.
     pub max_iterations: u32,
-    /// Equilibrium: ‖R‖ ≤ tolerance · ‖f^ext‖ at full gravity.
+    /// Equilibrium: ‖R‖ ≤ tolerance · ‖f^ext‖ at full gravity (both over the unknowns).
     pub tolerance: Real,
     /// Halvings of a load increment allowed in a row before the solve fails.
     pub max_cutbacks: u32,
@@ -116,14 +127,18 @@ impl GeostaticSettings {
     pub fn validate(&self) -> Result<(), SolverError> {
         let bad =
             |name, value: f64, expected| Err(SolverError::InvalidSetting { name, value, expected });
-        if self.load_steps == 0 || self.load_steps > 100_000 {
-            return bad("initial_state.load_steps", self.load_steps.into(), "1 ≤ load_steps ≤ 1e5");
+        if self.load_steps == 0 || self.load_steps > 1000 {
+            return bad(
+                "initial_state.load_steps",
+                self.load_steps.into(),
+                "1 ≤ load_steps ≤ 1000",
+            );
         }
-        if self.max_iterations == 0 || self.max_iterations > 10_000 {
+        if self.max_iterations == 0 || self.max_iterations > 1000 {
             return bad(
                 "initial_state.max_iterations",
                 self.max_iterations.into(),
-                "1 ≤ max_iterations ≤ 1e4",
+                "1 ≤ max_iterations ≤ 1000",
             );
         }
         if !(self.tolerance > 1e-15 && self.tolerance < 1.0) {
@@ -172,26 +187,38 @@ pub struct GeostaticReport {
     pub plastic_particles: usize,
     /// Largest nodal displacement of the solve (m): its small-strain measure.
     pub max_displacement: Real,
-    /// Constrained nodes on a Coulomb plane whose tangential reaction exceeds μ times their
-    /// normal one (the material there would slip locally; see `base_friction_ratio`).
+    /// Nodes stuck on one Coulomb plane whose tangential reaction exceeds μ times their normal
+    /// one (the material there would slip locally; see `base_friction_ratio`).
     pub slipping_nodes: usize,
-    /// Σ|tangential reaction| / Σ μ·normal reaction over the nodes on Coulomb planes with μ > 0
-    /// (0 where there are none): above 1 the base cannot hold the material.
+    /// The largest, over the Coulomb planes with μ > 0, of |Σ tangential reaction| / μ Σ normal
+    /// reaction at the nodes stuck on that plane alone (0 where there are none): above 1 the
+    /// base cannot hold the material.
     pub base_friction_ratio: Real,
     /// Free nodes whose mass is below [`TIE_RATIO`] of the heaviest node's, which follow their
-    /// neighbours instead of being unknowns of their own.
+    /// neighbours instead of being unknowns of their own (0 when the state exists without).
     pub tied_nodes: usize,
+    /// Planes that let their node go because they would have had to pull it.
+    pub released_planes: usize,
 }
 
-/// How one node's displacement is made of the unknowns: u_i = Σ_k c_k s_{r_k}.
+/// How one node's displacement is made of the unknowns: u_i = Σ_k c_k s_{r_k}; and which of
+/// those entries carry the node's own force into the equations (`rows`).
 #[derive(Clone, Debug, Default)]
 struct NodeDofs {
     entries: Vec<(u32, Vector)>,
+    /// the leading entries whose unknowns the node's force enters (all, except at a ghost: a
+    /// ghost's normal force goes to its wall, not to its image, as in the grid solve).
+    rows: Option<usize>,
 }
 
 impl NodeDofs {
+    /// the node's displacement in the unknowns (the trial map).
     fn entries(&self) -> &[(u32, Vector)] {
         &self.entries
+    }
+    /// where the node's force enters the reduced equations (the test map).
+    fn rows(&self) -> &[(u32, Vector)] {
+        &self.entries[..self.rows.unwrap_or(self.entries.len())]
     }
     fn push(&mut self, r: u32, c: Vector) {
         self.entries.push((r, c));
@@ -227,6 +254,18 @@ enum Hold {
 /// degrees are not: 1 − cos 1° = 1.5e-4).
 const SAME_NORMAL: Real = 1e-9;
 
+/// A plane pulls a node when its reaction along the normal is below −this × the node's force
+/// scale (|m_i g| + |f_i^int|): rounding of a node at rest on it is ~1e-16 of that.
+const PULL_TOLERANCE: Real = 1e-9;
+
+/// At most this many planes are let go (each a new solve); past it the state is kept as is.
+const MAX_RELEASED: usize = 64;
+
+/// whether the plane of normal `n` at `node` was let go.
+fn is_released(released: &[(u32, Vector)], node: u32, n: Vector) -> bool {
+    released.iter().any(|&(k, m)| k == node && 1.0 - m.dot(n) < SAME_NORMAL)
+}
+
 /// A load step's attempt that did not reach equilibrium, and why.
 struct Failed {
     cause: String,
@@ -252,6 +291,13 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 expected: "an initial state is solved before the first step",
             });
         }
+        if self.config.gravity_ramp > 0.0 {
+            return Err(SolverError::Incompatible {
+                setting: "initial_state",
+                with: "gravity_ramp",
+                reason: "the solve puts the material at rest under full gravity; set the ramp to 0",
+            });
+        }
         if self.config.periodic.is_some() {
             return Err(SolverError::Incompatible {
                 setting: "initial_state",
@@ -263,8 +309,73 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         self.detect_contact(0.0);
         // m_i (eq 1), as every step sums it; f^ext = m_i g at full gravity.
         self.p2g_mass_velocity();
+        // Every node its own unknowns first: then the explicit run starts in the same
+        // equilibrium, node by node. Only where that has none (the first load step fails: a
+        // cohesionless free surface cutting cells) do poorly supported nodes follow their
+        // neighbours (module docs), from the start again.
+        let untied = GeostaticSettings { max_cutbacks: 0, ..*settings };
+        // Planes hold one way, as in the grid solve: a plane that would have to pull a node
+        // (a corner ghost drawn away from a side wall) lets it go, and the solve starts again.
+        let (start_stress, start_state) =
+            (self.particles.stress.clone(), self.particles.state.clone());
+        let mut released: Vec<(u32, Vector)> = Vec::new();
+        let mut iterations = 0;
+        loop {
+            let mut report = match self.solve_with(&untied, false, &released) {
+                Err(SolverError::InitialState { iterations: spent, .. }) => {
+                    iterations += spent;
+                    self.solve_with(settings, true, &released)?
+                }
+                other => other?,
+            };
+            report.iterations += iterations;
+            let pulled = self.pulled_planes(&released);
+            if pulled.is_empty() || released.len() >= MAX_RELEASED {
+                report.released_planes = released.len();
+                return Ok(report);
+            }
+            iterations = report.iterations;
+            released.extend(pulled);
+            self.particles.stress.clone_from(&start_stress);
+            self.particles.state.clone_from(&start_state);
+        }
+    }
+
+    /// the (node, normal) of every plane holding a node that, at the particles' current
+    /// stresses, would have to pull it (its reaction along the normal below zero by more than
+    /// rounding).
+    fn pulled_planes(&mut self, released: &[(u32, Vector)]) -> Vec<(u32, Vector)> {
+        self.p2g_internal_force();
+        let g = self.config.gravity;
+        let sc = &self.scratch;
+        let mut pulled = Vec::new();
+        for b in &sc.boundary {
+            let i = b.node as usize;
+            let f = sc.mass[i] * g + sc.force[i];
+            let scale = (sc.mass[i] * g).length() + sc.force[i].length();
+            for plane in sc.node_planes[b.planes()].iter().filter(|p| p.held) {
+                let n = plane.wall.normal();
+                if plane.wall.boundary().friction() != Friction::Fixed
+                    && !is_released(released, b.node, n)
+                    && -f.dot(n) < -PULL_TOLERANCE * scale
+                {
+                    pulled.push((b.node, n));
+                }
+            }
+        }
+        pulled
+    }
+
+    /// the solve (module docs) with poorly supported nodes tied to their neighbours or not; the
+    /// particles are restored on failure.
+    fn solve_with(
+        &mut self,
+        settings: &GeostaticSettings,
+        tie: bool,
+        released: &[(u32, Vector)],
+    ) -> Result<GeostaticReport, SolverError> {
         let nodes = self.scratch.active.len();
-        let (dofs, unknowns, holds, ties) = self.node_dofs();
+        let (dofs, unknowns, holds, ties) = self.node_dofs(tie, released);
         let g = self.config.gravity;
         let f_grav: Vec<Vector> = self.scratch.mass.iter().map(|&m| m * g).collect();
 
@@ -286,7 +397,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             out.clear();
             out.resize(unknowns, 0.0);
             for (i, d) in dofs.iter().enumerate() {
-                for &(r, c) in d.entries() {
+                for &(r, c) in d.rows() {
                     out[r as usize] += c.dot(full[i]);
                 }
             }
@@ -316,6 +427,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             slipping_nodes: 0,
             base_friction_ratio: 0.0,
             tied_nodes: ties,
+            released_planes: 0,
         };
         // The stresses and states at the start of the current load step (committed ones).
         let mut base_stress = start_stress.clone();
@@ -355,8 +467,9 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     }
                     base_stress.clone_from(&self.particles.stress);
                     base_state.clone_from(&self.particles.state);
-                    // back towards the nominal increment after a cut
-                    increment = (2.0 * increment).min(nominal);
+                    // back towards the nominal increment after a cut, never past full gravity
+                    // (a clamped target would retry the step that just failed)
+                    increment = (2.0 * increment).min(nominal).min(1.0 - lambda);
                 }
                 Err(Failed { cause }) => {
                     halvings += 1;
@@ -387,44 +500,49 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         report.max_displacement = total_u.iter().map(|u| u.length()).fold(0.0, Real::max);
         report.plastic_particles = work.branches.iter().filter(|b| **b != Branch::ELASTIC).count();
 
-        // The reactions against the friction laws (module docs): R_i = −(f^ext − f^int).
+        // The reactions against the friction laws (module docs): R_i = −(f^ext − f^int), summed
+        // per plane as vectors (a stuck base's reactions may point inwards from both ends and
+        // cancel). A node held by two planes (a corner) is left out: which plane carries which
+        // part of its reaction is not determined.
         self.p2g_internal_force();
-        let (mut tangential, mut capacity) = (0.0, 0.0);
+        // (normal, μ, Σ tangential reaction along n⊥, Σ normal reaction) of each Coulomb plane
+        let mut planes: Vec<(Vector, Real, Real, Real)> = Vec::new();
+        let mut buf = Vec::new();
         for b in &self.scratch.boundary {
             let i = b.node as usize;
+            let held = held_planes(&mut buf, &self.scratch.node_planes[b.planes()]);
+            let (&[plane], Hold::Fixed) = (held, holds[i]) else { continue };
+            let Friction::Coulomb { mu } = plane.friction() else { continue };
+            if mu == 0.0 {
+                continue;
+            }
             let reaction = -(f_grav[i] + self.scratch.force[i]);
-            for plane in self.scratch.node_planes[b.planes()].iter().filter(|p| p.held) {
-                if let Friction::Coulomb { mu } = plane.wall.boundary().friction() {
-                    if mu > 0.0 && matches!(holds[i], Hold::Fixed) {
-                        let n = plane.wall.normal();
-                        let normal = reaction.dot(n);
-                        let t = (reaction - normal * n).length();
-                        tangential += t;
-                        capacity += mu * normal.max(0.0);
-                        if t > mu * normal.max(0.0) * (1.0 + 1e-9) {
-                            report.slipping_nodes += 1;
-                        }
-                    }
+            let n = plane.normal();
+            let (normal, tangential) = (reaction.dot(n), reaction.dot(n.perp()));
+            if tangential.abs() > mu * normal.max(0.0) * (1.0 + 1e-9) {
+                report.slipping_nodes += 1;
+            }
+            match planes.iter_mut().find(|p| p.1 == mu && 1.0 - p.0.dot(n) < SAME_NORMAL) {
+                Some(p) => {
+                    p.2 += tangential;
+                    p.3 += normal;
                 }
+                None => planes.push((n, mu, tangential, normal)),
             }
         }
-        if tangential > 0.0 {
-            report.base_friction_ratio = tangential / capacity;
-            if tangential > capacity {
+        let worst = planes
+            .iter()
+            .map(|&(_, mu, t, n)| {
+                let (t, capacity) = (t.abs(), mu * n.max(0.0));
+                // (no tangential load is no ratio, even on a plane that carries nothing)
+                (if t == 0.0 { 0.0 } else { t / capacity }, t, capacity)
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((ratio, tangential, capacity)) = worst {
+            report.base_friction_ratio = ratio;
+            if ratio > 1.0 {
                 restore(self);
-                return Err(SolverError::InitialState {
-                    load_factor: 1.0,
-                    attempted: 1.0,
-                    iterations: report.iterations,
-                    residual: report.residual,
-                    cause: format!(
-                        "the material is in equilibrium only on a stuck base: the tangential \
-                         reactions on the friction planes sum to {tangential:.4e} N/m, {:.3} \
-                         times what their friction can hold ({capacity:.4e} N/m); the body would \
-                         slide as a whole (a retaining wall or gate, or a rougher base, holds it)",
-                        tangential / capacity
-                    ),
-                });
+                return Err(SolverError::SlidingBase { ratio, tangential, capacity });
             }
         }
 
@@ -465,27 +583,26 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             }
             // K from the tangents at the current increment.
             let correction = self.correction(dofs, shift, base_stress, base_state, work)?;
-            // Backtracking on ‖R‖: the full Newton step, else halves of it.
+            // Backtracking on ‖R‖: the full Newton step, else halves of it; the last halving
+            // (1/32) is taken even if it does not reduce ‖R‖ (the next tangent may).
             let s0 = work.s.clone();
             let mut moved = 0.0;
-            let mut accepted = false;
             let mut factor = 1.0;
-            for _ in 0..6 {
+            for tries in 1..=6 {
                 let trial: Vec<Real> =
                     s0.iter().zip(&correction).map(|(s, d)| s + factor * d).collect();
                 match self.residual(target, dofs, f_grav, base_stress, base_state, work, &trial) {
                     Ok(res) => {
                         let n = norm(&work.r) / load_norm;
-                        if n < r_norm || factor < 0.05 {
+                        if n < r_norm || tries == 6 {
                             work.s = trial;
                             moved = res;
                             r_norm = n;
-                            accepted = true;
                             break;
                         }
                     }
-                    Err(_) if factor >= 0.05 => {}
-                    Err(e) => return Err(e),
+                    Err(e) if tries == 6 => return Err(e),
+                    Err(_) => {}
                 }
                 factor *= 0.5;
             }
@@ -495,11 +612,6 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 iteration: it,
                 residual: r_norm,
             });
-            if !accepted {
-                return Err(Failed {
-                    cause: format!("no correction reduced the residual ({r_norm:.3e})"),
-                });
-            }
             if moved > self.cell_size {
                 return Err(Failed {
                     cause: format!(
@@ -570,7 +682,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         out.resize(s.len(), 0.0);
         for (i, d) in dofs.iter().enumerate() {
             let r_i = target * f_grav[i] + self.scratch.force[i];
-            for &(r, c) in d.entries() {
+            for &(r, c) in d.rows() {
                 out[r as usize] += c.dot(r_i);
             }
         }
@@ -632,7 +744,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     };
                     // the 2 × 2 block K_kl by columns: force on k of unit u_l along x, along y.
                     let (kx, ky) = (row(&dbx), row(&dby));
-                    for &(r1, c1) in dofs[idx[k] as usize].entries() {
+                    for &(r1, c1) in dofs[idx[k] as usize].rows() {
                         for &(r2, c2) in dofs[idx[l] as usize].entries() {
                             // c1ᵀ K_kl c2
                             let val = c1.dot(kx * c2.x + ky * c2.y);
@@ -660,25 +772,36 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
 
     /// how each active node's displacement is made of the unknowns (module docs), the number of
     /// unknowns, and how each node is held.
-    fn node_dofs(&self) -> (Vec<NodeDofs>, usize, Vec<Hold>, usize) {
+    fn node_dofs(
+        &self,
+        tie: bool,
+        released: &[(u32, Vector)],
+    ) -> (Vec<NodeDofs>, usize, Vec<Hold>, usize) {
         let sc = &self.scratch;
         let nodes = sc.active.len();
         let mut holds = vec![Hold::Free; nodes];
         let mut buf = Vec::new();
         for b in &sc.boundary {
-            let planes = held_planes(&mut buf, &sc.node_planes[b.planes()]);
+            let mut planes = held_planes(&mut buf, &sc.node_planes[b.planes()]).to_vec();
+            planes.retain(|p| !is_released(released, b.node, p.normal()));
             if planes.is_empty() {
                 continue;
             }
             let i = b.node as usize;
-            if let Some(m) = b.mirror {
+            let mirror = b.mirror.filter(|m| !is_released(released, b.node, m.normal));
+            if let Some(m) = mirror {
+                // As in the grid solve: the ghost meets a wall moving with its image's mirrored
+                // normal motion; it slides along it only on a frictionless plane, and not when
+                // another plane holds it too (a ghost on the floor's line beside a wall, a
+                // corner ghost), whose normal is the mirror plane's tangent.
                 let frictionless = planes
                     .iter()
                     .all(|p| matches!(p.friction(), Friction::Coulomb { mu } if mu == 0.0));
+                let other = planes.iter().any(|p| 1.0 - p.normal().dot(m.normal) >= SAME_NORMAL);
                 holds[i] = Hold::Ghost {
                     image: m.image,
                     normal: m.normal,
-                    tangential: frictionless && !m.fixed,
+                    tangential: frictionless && !m.fixed && !other,
                     fixed: m.fixed,
                 };
                 continue;
@@ -693,7 +816,8 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         // Poorly supported free nodes follow their well-supported neighbours (module docs).
         let mass = &sc.mass;
         let heaviest = mass.iter().copied().fold(0.0, Real::max);
-        let poor = |i: usize| matches!(holds[i], Hold::Free) && mass[i] < TIE_RATIO * heaviest;
+        let poor =
+            |i: usize| tie && matches!(holds[i], Hold::Free) && mass[i] < TIE_RATIO * heaviest;
         let mut dofs = vec![NodeDofs::default(); nodes];
         let mut next = 0u32;
         let mut new_dof = || {
@@ -741,17 +865,41 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             dofs[i] = d;
             ties += 1;
         }
-        for i in 0..nodes {
-            if let Hold::Ghost { image, normal, tangential, fixed } = holds[i] {
+        // A ghost mirrors its image's map, which must be final: a corner ghost's image may be
+        // a ghost itself, so ghosts are expressed in passes, those whose image is done first.
+        let mut pending: Vec<usize> =
+            (0..nodes).filter(|&i| matches!(holds[i], Hold::Ghost { .. })).collect();
+        while !pending.is_empty() {
+            let before = pending.len();
+            let waiting: Vec<bool> = {
+                let mut w = vec![false; nodes];
+                for &i in &pending {
+                    w[i] = true;
+                }
+                w
+            };
+            pending.retain(|&i| {
+                let Hold::Ghost { image, normal, tangential, fixed } = holds[i] else {
+                    return false;
+                };
+                if waiting[image as usize] && image as usize != i {
+                    return true;
+                }
                 let img = dofs[image as usize].clone();
                 if fixed {
                     dofs[i].add(&img, |c| -c);
-                    continue;
+                } else {
+                    if tangential {
+                        dofs[i].push(new_dof(), normal.perp());
+                    }
+                    dofs[i].add(&img, |c| -normal.dot(c) * normal);
                 }
-                if tangential {
-                    dofs[i].push(new_dof(), normal.perp());
-                }
-                dofs[i].add(&img, |c| -normal.dot(c) * normal);
+                dofs[i].rows = Some(usize::from(tangential && !fixed));
+                false
+            });
+            if pending.len() == before {
+                // a cycle of images (not made by the grids here): those ghosts stay held
+                break;
             }
         }
         (dofs, next as usize, holds, ties)
@@ -794,6 +942,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         // The ramp settles the material from rest; the bodies' own velocities (a block thrown
         // at t = 0) are given back once it has.
+        // (a failed ramp gives the particles back as they were)
+        let given = self.particles.clone();
         let declared = std::mem::take(&mut self.particles.velocity);
         let declared_affine = std::mem::take(&mut self.particles.affine);
         self.particles.velocity = vec![Vector::ZERO; declared.len()];
@@ -804,7 +954,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.config.gravity_ramp = ramp;
         let end = self.run_until(ramp + hold, &mut ());
         self.config.gravity_ramp = own;
-        end?;
+        if let Err(e) = end {
+            *self.particles_mut() = given;
+            self.restart_clock();
+            return Err(e);
+        }
         let kinetic = self.energy().kinetic;
         let p_speed = self.particles.velocity.iter().map(|v| v.length()).fold(0.0, Real::max);
         let report = SettleReport { steps: self.step, kinetic_energy: kinetic, max_speed: p_speed };
@@ -812,14 +966,27 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         p.velocity = declared;
         p.affine = declared_affine;
         p.initial_position.clone_from(&p.position);
+        self.restart_clock();
+        Ok(report)
+    }
+
+    /// time, step, last report and dissipation back to those of a run not yet started, and the
+    /// ledger's reference to the current stored energy.
+    fn restart_clock(&mut self) {
         self.time = 0.0;
         self.step = 0;
-        self.last.step = 0;
-        self.last.time = 0.0;
+        self.last = crate::solver::StepReport {
+            step: 0,
+            time: 0.0,
+            dt: 0.0,
+            courant: 0.0,
+            active_nodes: 0,
+            branches: crate::solver::BranchCounts::none(M::BRANCHES),
+        };
+        self.grid_mass_kept = None;
         self.dissipation = crate::energy::Dissipation::default();
         self.next_signal = None;
         self.initial_stored = self.energy().stored();
-        Ok(report)
     }
 }
 
@@ -880,7 +1047,7 @@ fn norm(v: &[Real]) -> Real {
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
-    use mpm_grid::{Bilinear, RegularGrid};
+    use mpm_grid::{Bilinear, QuadraticBSpline, RegularGrid};
 
     use super::*;
     use crate::generate::{Shape, fill};
@@ -969,12 +1136,12 @@ mod tests {
 
     /// An elastic block on a Coulomb floor under gravity tilted by θ = 30° (a block on a 30°
     /// slope): the floor holds it only where μ ≥ tan θ. The reactions sum to the weight, so the
-    /// base's friction ratio Σ|T| / Σ μN is tan θ / μ when every tangential reaction points down
-    /// the slope, as here (measured 2.4e-14 off; 1e-9 allows the solve's residual).
+    /// base's friction ratio |ΣT| / μΣN is tan θ / μ (measured 2.4e-14 off; 1e-9 allows the
+    /// solve's residual).
     #[test]
     fn a_block_on_a_coulomb_base_stands_only_where_its_friction_holds_it() {
         let theta = 30_f64.to_radians();
-        let run = |mu: Real| {
+        let run = |theta: Real, mu: Real| {
             let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [12, 8]).unwrap();
             let shape = Shape::Rectangle { min: Vector::new(1.0, 0.0), max: Vector::new(2.0, 0.5) };
             let config = SolverConfig {
@@ -992,15 +1159,58 @@ mod tests {
             s.solve_geostatic(&GeostaticSettings::default())
         };
         let mu = 40_f64.to_radians().tan();
-        let r = run(mu).unwrap();
+        let r = run(theta, mu).unwrap();
         let least = theta.tan() / mu;
         assert!(
             (r.base_friction_ratio / least - 1.0).abs() <= 1e-9,
             "{} vs {least}: {r:?}",
             r.base_friction_ratio
         );
-        let e = run(20_f64.to_radians().tan()).unwrap_err();
-        let SolverError::InitialState { cause, .. } = &e else { panic!("{e}") };
-        assert!(cause.contains("slide as a whole"), "{e}");
+        let mu = 20_f64.to_radians().tan();
+        let e = run(theta, mu).unwrap_err();
+        let SolverError::SlidingBase { ratio, .. } = e else { panic!("{e}") };
+        assert!((ratio / (theta.tan() / mu) - 1.0).abs() <= 1e-9, "{e}");
+        // On level ground the base's reactions point inwards from both ends and cancel (by
+        // symmetry, to the solve's residual): even μ = 0.1 holds the block, though its two end
+        // nodes slip locally. The sum of their sizes, used before, counted them as a load on
+        // the friction (review finding).
+        let level = run(0.0, 0.1).unwrap();
+        assert!(level.base_friction_ratio < 1e-6, "{level:?}");
+    }
+
+    /// Wide stencils: the same K0 layer with quadratic B-splines, whose ghost nodes below the
+    /// floor and beside the walls mirror their images (the corner ghosts mirror ghosts). The
+    /// 1D answer is not exact at the particles there (the mirror condition bends the field near
+    /// the boundaries), but the state is the explicit solver's equilibrium: 50 of its steps from
+    /// it leave the layer at rest (fastest particle 5e-15 m/s, measured), where from a
+    /// stress-free start it falls (6.6e-2 m/s). Before the ghosts' forces went to their walls
+    /// instead of their images and the corner ghosts were let go of the side walls that would
+    /// have pulled them, the same steps reached 7.7e-3 m/s (review finding).
+    #[test]
+    fn the_k0_layer_with_b_splines_is_at_rest_in_the_explicit_run_too() {
+        let (h, depth, nu) = (0.25, 2.0, 0.3);
+        let speed_after = |implicit: bool| {
+            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(h), [4, 12]).unwrap();
+            let shape = Shape::Rectangle { min: Vector::ZERO, max: Vector::new(1.0, depth) };
+            let config = SolverConfig {
+                boundaries: walls(Friction::Coulomb { mu: 0.0 }),
+                gravity: Vector::new(0.0, -G),
+                ..Default::default()
+            };
+            let elastic = LinearElastic::from_young_poisson(5e7, nu).unwrap();
+            let particles = particles(&shape, h / 2.0, ());
+            let mut s =
+                Solver::new(QuadraticBSpline::new(grid), vec![elastic], particles, config).unwrap();
+            if implicit {
+                let report = s.solve_geostatic(&GeostaticSettings::default()).unwrap();
+                assert!(report.residual <= 1e-10, "{report:?}");
+            }
+            for _ in 0..50 {
+                s.step().unwrap();
+            }
+            s.particles().velocity.iter().map(|v| v.length()).fold(0.0, Real::max)
+        };
+        let (rest, fall) = (speed_after(true), speed_after(false));
+        assert!(rest < 1e-6 * fall, "{rest} against {fall}");
     }
 }

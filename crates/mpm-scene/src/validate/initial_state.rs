@@ -8,14 +8,25 @@ use crate::error::SceneError;
 use crate::file::{InitialStateMethod, InitialStateSpec};
 use crate::scene::InitialState;
 
-/// Checks `[initial_state]`; `gravity_ramp` is `[solver] gravity_ramp` (s), `periodic` whether
-/// the scene has periodic sides.
+/// What of the rest of the scene `[initial_state]` is checked against.
+pub(super) struct Around {
+    /// `[solver] gravity_ramp` (s).
+    pub gravity_ramp: f64,
+    /// whether the scene has periodic sides.
+    pub periodic: bool,
+    /// the first step's Δt (s) and the most steps a run may take: a gravity ramp that would
+    /// take more steps is refused, as a run would be.
+    pub initial_dt: f64,
+    pub max_steps: u64,
+}
+
+/// Checks `[initial_state]`.
 pub(super) fn build(
     ctx: &Ctx<'_>,
     spec: Option<&InitialStateSpec>,
-    gravity_ramp: f64,
-    periodic: bool,
+    around: &Around,
 ) -> Result<InitialState, SceneError> {
+    let Around { gravity_ramp, periodic, initial_dt, max_steps } = *around;
     let Some(s) = spec else { return Ok(InitialState::None) };
     let implicit_fields = [
         ("load_steps", s.load_steps.is_some()),
@@ -71,14 +82,14 @@ pub(super) fn build(
                 "load_steps",
                 s.load_steps,
                 d.load_steps,
-                100_000,
+                1000,
                 "1 for an elastic material; 4–10 to follow a plastic loading path",
             )?;
             let max_iterations = count(
                 "max_iterations",
                 s.max_iterations,
                 d.max_iterations,
-                10_000,
+                1000,
                 "the default 50 is plenty for a state that exists",
             )?;
             let tolerance = s.tolerance.unwrap_or(d.tolerance);
@@ -121,6 +132,19 @@ pub(super) fn build(
                     hold,
                     "0 ≤ settle_time ≤ 1e4 (s)",
                     "e.g. half the ramp time",
+                ));
+            }
+            let steps = (ramp + hold) / initial_dt;
+            if steps > max_steps as f64 {
+                return Err(ctx.err(
+                    "initial_state.ramp_time",
+                    Some(num(ramp)),
+                    format!(
+                        "the ramp and hold need about {steps:.3e} steps at the first Δt \
+                         ({initial_dt:.3e} s), more than max_steps = {max_steps}"
+                    ),
+                    format!("(ramp_time + settle_time) / Δt ≤ max_steps = {max_steps}"),
+                    "a shorter ramp, or method = \"implicit\" (one solve, no steps)",
                 ));
             }
             Ok(InitialState::GravityRamp { ramp, hold })
@@ -170,5 +194,14 @@ mod tests {
         let text = format!("{ramped}\n[initial_state]\nmethod = \"implicit\"\n");
         let e = load_scene_str(&text, "t.toml").unwrap_err();
         assert_eq!(e.path, "solver.gravity_ramp", "{e}");
+        // a ramp longer than the run's step budget (the flume's Δt is about 2e-4 s)
+        let budget = embedded_scene("flume")
+            .unwrap()
+            .replace("end_time = 3.0", "end_time = 3.0\nmax_steps = 20000");
+        let text =
+            format!("{budget}\n[initial_state]\nmethod = \"gravity_ramp\"\nramp_time = 10.0\n");
+        let e = load_scene_str(&text, "t.toml").unwrap_err();
+        assert_eq!(e.path, "initial_state.ramp_time", "{e}");
+        assert!(e.problem.contains("max_steps"), "{e}");
     }
 }

@@ -293,12 +293,13 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;
-    let initial_state = initial_state::build(
-        ctx,
-        f.initial_state.as_ref(),
-        config.gravity_ramp,
-        config.periodic.is_some(),
-    )?;
+    let around = initial_state::Around {
+        gravity_ramp: config.gravity_ramp,
+        periodic: config.periodic.is_some(),
+        initial_dt,
+        max_steps: settings.max_steps,
+    };
+    let initial_state = initial_state::build(ctx, f.initial_state.as_ref(), &around)?;
     let output = output::build(
         ctx,
         &f.output,
