@@ -305,6 +305,18 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 reason: "the implicit solve does not pair periodic columns; start stress-free",
             });
         }
+        // gravity alone loads the initial state (the body force is for the run's steps)
+        let body = std::mem::take(&mut self.body_force);
+        let solved = self.solve_geostatic_under_gravity(settings);
+        self.body_force = body;
+        solved
+    }
+
+    /// [`Solver::solve_geostatic`] once its settings are checked, with no body force set.
+    fn solve_geostatic_under_gravity(
+        &mut self,
+        settings: &GeostaticSettings,
+    ) -> Result<GeostaticReport, SolverError> {
         self.locate()?;
         self.detect_contact(0.0);
         // m_i (eq 1), as every step sums it; f^ext = m_i g at full gravity.

@@ -1,7 +1,8 @@
 //! Stage 3: particle-to-grid sums.
 //!
 //! m_i = Σ_p m_p S_ip (eq 1); q_i = Σ_p m_p v_p S_ip and v_i = q_i / m_i;
-//! f_i = −Σ_p V_p σ_p · G_ip (eq 2) + Σ_p m_p S_ip b (eq 3, b = gravity).
+//! f_i = −Σ_p V_p σ_p · G_ip (eq 2) + Σ_p m_p S_ip b (eq 3, b = gravity, plus the particle's own
+//! body force where the caller prescribed one: [`Solver::set_body_force`]).
 //!
 //! A block scatter with a fixed reduction order. The active nodes come in 8 × 8 blocks
 //! ([`mpm_grid::ActiveNodes`]) and `locate` bins every particle with the block that holds its
@@ -106,6 +107,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (mass, velocity, volume, stress) =
             (&p.mass[..], &p.velocity[..], &p.volume[..], &p.stress[..]);
         let (position, affine) = (&p.position[..], &p.affine[..]);
+        // empty unless a caller prescribed per-particle body forces (then one per particle)
+        let body = &self.body_force[..];
         let Scratch {
             factors,
             bin_start,
@@ -155,6 +158,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let wq = shape.weights(f);
                     let gq = if FORCE { shape.gradients(f) } else { [Vector::ZERO; N] };
                     let (vol, s) = (volume[q], stress[q]);
+                    let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
                     let (c_q, x0) = if APIC {
                         (affine[q], position[q] - dt_back * v)
                     } else {
@@ -170,7 +174,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
                         }
                         if FORCE {
-                            bf[c] += mw * g - vol * in_plane(&s, gq[k]);
+                            bf[c] += mw * b - vol * in_plane(&s, gq[k]);
                         }
                     }
                 }
