@@ -11,6 +11,7 @@
 use std::ops::ControlFlow;
 
 pub mod geostatic;
+pub mod manufactured;
 pub mod open_core;
 
 use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};

@@ -9,6 +9,7 @@ mod verification {
     pub mod geostatic;
     pub mod guards;
     pub mod kinks;
+    pub mod manufactured;
     pub mod objectivity;
     pub mod open_core;
     pub mod small_mass;

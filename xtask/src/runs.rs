@@ -14,6 +14,8 @@ pub enum Case {
     Bar,
     /// the sand flume, error of the front position against the finest run.
     Flume,
+    /// the manufactured solution of Wallstedt & Guilkey (2008), RMS displacement error.
+    Manufactured,
 }
 
 impl Case {
@@ -24,6 +26,7 @@ impl Case {
             Case::Inclined => "sliding-inclined",
             Case::Bar => "vibrating-bar",
             Case::Flume => "flume",
+            Case::Manufactured => "manufactured",
         }
     }
 
@@ -35,6 +38,9 @@ impl Case {
             Case::Bar => "|T − 10 s| / 10 s (exact period)",
             Case::Flume => {
                 "|front − front of the finest run| / runout of the finest run (no exact answer)"
+            }
+            Case::Manufactured => {
+                "RMS over the particles of |x − x_exact| / A at t = 1/(2c) (Wallstedt & Guilkey 2008)"
             }
         }
     }

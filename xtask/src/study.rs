@@ -20,6 +20,7 @@ use std::time::Instant;
 use anyhow::Result;
 use mpm_solver::Scheme;
 use mpm_tests::abe2005::{eq21_distance, eq22_travel};
+use mpm_tests::manufactured::manufactured;
 use mpm_tests::{
     CaseError, Cost, Discretisation, MassMatrix, ShapeKind, sliding_horizontal, sliding_inclined,
     vibrating_bar,
@@ -47,6 +48,14 @@ fn measure(case: Case, d: &Discretisation) -> Measure {
                 r.period_ratio * mpm_tests::bar::period(),
                 (r.period_ratio - 1.0).abs(),
                 r.worst_energy,
+                r.cost,
+            )
+        }),
+        Case::Manufactured => manufactured(d).map(|r| {
+            (
+                r.rms_error * mpm_tests::manufactured::AMPLITUDE,
+                r.rms_error,
+                r.energy_residual,
                 r.cost,
             )
         }),
@@ -152,6 +161,21 @@ fn plans(quick: bool) -> Vec<Plan> {
             cells: ladder(&[1.0, 0.5, 0.25, 0.125], 3),
             shapes: ShapeKind::ALL.to_vec(),
         },
+        // Refinement ladders only (the convergence orders): Δt is that of C = 0.1 at 1/64 m on
+        // every level, so the ladder measures the spatial error.
+        Plan {
+            case: Case::Manufactured,
+            baseline: Discretisation {
+                cell: 0.125,
+                ppc: 2,
+                scheme: Scheme::Musl,
+                shape: ShapeKind::Bilinear,
+                courant: 0.1,
+                mass: MassMatrix::Lumped,
+            },
+            cells: ladder(&[0.125, 0.0625, 0.03125, 0.015625], 3),
+            shapes: ShapeKind::ALL.to_vec(),
+        },
     ]
 }
 
@@ -173,9 +197,9 @@ pub fn run(quick: bool) -> Result<bool> {
             }
         }
         // The consistent mass matrix's ladder: the same cells and shapes, for the cases whose
-        // error it is meant to reduce (the bar's wave; not the granular or frictional cases, see
-        // the README).
-        if plan.case == Case::Bar {
+        // error it is meant to reduce (the bar's wave, the manufactured solution; not the
+        // granular or frictional cases, see the README).
+        if matches!(plan.case, Case::Bar | Case::Manufactured) {
             for &shape in &plan.shapes {
                 for &cell in &plan.cells {
                     let mass = MassMatrix::Consistent;
@@ -183,6 +207,9 @@ pub fn run(quick: bool) -> Result<bool> {
                     runner.run(plan.case, &format!("cell-{}-consistent", shape.name()), d);
                 }
             }
+        }
+        if plan.case == Case::Manufactured {
+            continue;
         }
         for ppc in 1..=4 {
             runner.run(plan.case, "ppc", Discretisation { ppc, ..b });

@@ -64,6 +64,27 @@ const CONSISTENT_MOMENTUM_REL: f64 = 1e-12;
 /// ~1e-13).
 const GEOSTATIC_K0_REL: f64 = 1e-6;
 
+/// Manufactured solution, uGIMP with either matrix, A = 0.02: the observed order of the RMS
+/// displacement error between 1/16 and 1/64 m must be at least 1 (measured 1.4 lumped and 1.1
+/// consistent: large strains limit uGIMP, as Wallstedt & Guilkey found; below 1 it has lost
+/// convergence, e.g. to a boundary error that does not shrink with the cell).
+const MMS_GIMP_ORDER: f64 = 1.0;
+/// Quadratic B-splines: at least 0.8 (measured 1.0–1.2: the ghost nodes behind the fixed walls
+/// keep them first order).
+const MMS_BSPLINE_ORDER: f64 = 0.8;
+/// uGIMP at A = 1e-4 (no cell crossing, small strain) must converge at second order at least:
+/// measured 2.4 with the lumped matrix between 1/16 and 1/64 m (2.1 with the consistent one).
+const MMS_SMALL_ORDER: f64 = 2.0;
+/// The energy ledger with the body force's work booked as external work, uGIMP at A = 1e-4 and
+/// 1/64 m: measured 6.6e-4 of the initial kinetic energy, the first-order time error at this Δt
+/// (1.1e-2 at C = 0.1 of 1/64 m); 5e-3 leaves room. (At A = 0.02 the ledger's small-strain
+/// energy σ²V/2E is itself off by O(strain): 1.1e-2.)
+const MMS_ENERGY: f64 = 5e-3;
+/// B-splines behind fixed walls: the error at 1/8 m may change by 10 % when Δt shrinks eightfold
+/// (measured 2 %; the ghost's mirrored velocity once kicked the particles by a step-size-free
+/// amount each step: 0.15 → 1.84 for Δt/32).
+const MMS_DT_REL: f64 = 0.1;
+
 const HEADER: [&str; 8] =
     ["case", "quantity", "reference", "source", "computed", "error", "tolerance", "result"];
 
@@ -428,6 +449,7 @@ pub fn run(quick: bool) -> Result<bool> {
         }
     }
     consistent_mass_rows(&mut rows, quick);
+    manufactured_rows(&mut rows);
     geostatic_rows(&mut rows);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
     let exact = (0..=1000)
@@ -747,6 +769,98 @@ fn geostatic_rows(rows: &mut Rows) {
 /// The consistent mass matrix (`[solver] mass = "consistent"`): on the vibrating bar its energy
 /// and period errors are below the lumped matrix's at the same resolution and Δt, and with no
 /// boundary it conserves momentum to rounding under every scheme.
+/// The manufactured solution of Wallstedt & Guilkey (2008) (`mpm_tests::manufactured`): observed
+/// orders of the RMS displacement error per shape function and mass matrix over 1/16, 1/32 and
+/// 1/64 m cells (MUSL, 2 × 2 particles per cell, one Δt on every level).
+fn manufactured_rows(rows: &mut Rows) {
+    use mpm_tests::manufactured::{AMPLITUDE, Manufactured, manufactured_at};
+    let cells = [1.0 / 16.0, 1.0 / 32.0, 1.0 / 64.0];
+    let base = Discretisation {
+        cell: 0.125,
+        ppc: 2,
+        scheme: Scheme::Musl,
+        shape: ShapeKind::Bilinear,
+        courant: 0.1,
+        mass: MassMatrix::Lumped,
+    };
+    let ladder = |shape, mass, a| -> Result<Vec<Manufactured>, mpm_tests::CaseError> {
+        let run = |cell| manufactured_at(&Discretisation { cell, shape, mass, ..base }, a);
+        cells.iter().map(|&cell| run(cell)).collect()
+    };
+    let order = |errors: &[f64]| {
+        let xy: Vec<(f64, f64)> = cells.iter().zip(errors).map(|(h, e)| (h.ln(), e.ln())).collect();
+        crate::study::slope(&xy)
+    };
+    let shown = |errors: &[f64]| errors.iter().map(|&e| num(e)).collect::<Vec<_>>().join(", ");
+    let mut cases = vec![
+        (ShapeKind::Gimp, MassMatrix::Lumped, AMPLITUDE, MMS_GIMP_ORDER),
+        (ShapeKind::Gimp, MassMatrix::Consistent, AMPLITUDE, MMS_GIMP_ORDER),
+        (ShapeKind::BSpline, MassMatrix::Lumped, AMPLITUDE, MMS_BSPLINE_ORDER),
+        (ShapeKind::BSpline, MassMatrix::Consistent, AMPLITUDE, MMS_BSPLINE_ORDER),
+        (ShapeKind::Gimp, MassMatrix::Lumped, 1e-4, MMS_SMALL_ORDER),
+    ];
+    // bilinear: no order to bound (it diverges once particles cross cells); reported
+    cases.push((ShapeKind::Bilinear, MassMatrix::Lumped, AMPLITUDE, f64::NAN));
+    for (shape, mass, a, bound) in cases {
+        let mass_name = if mass == MassMatrix::Lumped { "lumped" } else { "consistent" };
+        let case = format!("manufactured solution A = {a} m {} {mass_name}", shape.name());
+        let runs = ladder(shape, mass, a);
+        let errors = runs.as_ref().map(|r| r.iter().map(|m| m.rms_error).collect::<Vec<_>>());
+        match errors {
+            Ok(errors) if bound.is_nan() => rows.info(
+                &case,
+                "RMS |x − x_exact| / A at 1/16, 1/32, 1/64 m",
+                "→ 0",
+                "Wallstedt & Guilkey 2008",
+                format!("{} (order {:.2}: cell crossing)", shown(&errors), order(&errors)),
+            ),
+            Ok(errors) => {
+                let observed = order(&errors);
+                let ok = observed >= bound;
+                rows.push(
+                    vec![
+                        case.clone(),
+                        format!("order of RMS |x − x_exact| / A ({})", shown(&errors)),
+                        "converges".into(),
+                        "Wallstedt & Guilkey 2008".into(),
+                        format!("{observed:.2}"),
+                        "–".into(),
+                        format!("≥ {bound}"),
+                    ],
+                    status(ok),
+                );
+            }
+            Err(e) => rows.failed(&case, "run", &e),
+        }
+        if let (Ok(runs), true) = (&runs, a < AMPLITUDE) {
+            rows.at_most(
+                (&case, "|energy residual| / initial kinetic energy at 1/64 m"),
+                "0",
+                "body force's work booked",
+                runs[2].energy_residual,
+                MMS_ENERGY,
+                true,
+            );
+        }
+    }
+    let case = "manufactured solution B-spline lumped 1/8 m, Δt and Δt/8";
+    let at = |courant| {
+        let d = Discretisation { cell: 0.125, shape: ShapeKind::BSpline, courant, ..base };
+        manufactured_at(&d, AMPLITUDE).map(|m| m.rms_error)
+    };
+    match (at(1.6), at(0.2)) {
+        (Ok(coarse), Ok(fine)) => rows.rel(
+            case,
+            "RMS |x − x_exact| / A, Δt/8 against Δt",
+            coarse,
+            "the same spatial error",
+            fine,
+            MMS_DT_REL,
+        ),
+        (Err(e), _) | (_, Err(e)) => rows.failed(case, "run", &e),
+    }
+}
+
 fn consistent_mass_rows(rows: &mut Rows, quick: bool) {
     let mut bars = vec![(ShapeKind::Bilinear, 1.0)];
     if !quick {
