@@ -262,6 +262,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) node_planes: Vec<NodePlane>,
     /// The planes holding one node, gathered for the contact law (reused).
     pub(crate) plane_buf: Vec<Boundary>,
+    /// (image, ghost force, ghost mass) of the ghosts behind fixed planes that the lumped grid
+    /// solve ties to their images (`stages/grid.rs`, reused).
+    pub(crate) ties: Vec<(u32, Vector, Real)>,
     /// The arrays below `first_node` describe the current `first_node` (false before the first
     /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
@@ -314,6 +317,7 @@ impl<F, const N: usize> Scratch<F, N> {
             boundary: Vec::new(),
             node_planes: Vec::new(),
             plane_buf: Vec::new(),
+            ties: Vec::new(),
             located: false,
             stencils_ahead: None,
             saved: Vec::new(),
@@ -353,6 +357,7 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.boundary.capacity() * size_of::<BoundaryNode>()
             + self.node_planes.capacity() * size_of::<NodePlane>()
             + self.plane_buf.capacity() * size_of::<Boundary>()
+            + self.ties.capacity() * size_of::<(u32, Vector, Real)>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
             + self.consistent.heap_bytes()
     }

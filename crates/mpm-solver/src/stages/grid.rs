@@ -20,13 +20,51 @@ use rayon::prelude::*;
 use crate::config::{Contact, MassMatrix};
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::solver::{NodePlane, Solver};
+use crate::solver::{NodePlane, Scratch, Solver};
 
 /// the planes of `planes` that hold their node this step, gathered into `buf` for the contact law.
 pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {
     buf.clear();
     buf.extend(planes.iter().filter(|p| p.held).map(|p| *p.wall.boundary()));
     buf
+}
+
+/// The method of images behind fixed planes, lumped matrix: the velocity field is odd across a
+/// fixed plane, so the material's mirror image would add to the image node j of a ghost g the
+/// ghost's own sums, negated: a_j = (f_j − f_g)/(m_j + m_g) (the tie a_g = −a_j applied to the
+/// lumped system, TᵀMT, as the consistent re-solve applies it to its matrix). Without it the nodes
+/// next to the wall feel material on one side only, and B-splines converged at first order on the
+/// manufactured solution. Ghosts and images below the small-mass threshold are left alone; several
+/// ghosts of one image all add. Returns the impulse the tie gives the material at the images,
+/// Σ (m_j a_j − f_j) Δt (the ghost's share is booked with its mirror in the grid solve).
+fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: Real) -> Vector {
+    sc.ties.clear();
+    for b in &sc.boundary {
+        let Some(m) = b.mirror.filter(|m| m.fixed) else { continue };
+        if !sc.node_planes[b.planes()].iter().any(|p| p.held) {
+            continue;
+        }
+        let (g, j) = (b.node as usize, m.image as usize);
+        if sc.mass[g] > small && sc.mass[j] > small {
+            sc.ties.push((m.image, sc.force[g], sc.mass[g]));
+        }
+    }
+    // stable: the ghosts of one image add in boundary order, whatever the threads
+    sc.ties.sort_by_key(|t| t.0);
+    let mut impulse = Vector::ZERO;
+    let mut k = 0;
+    while k < sc.ties.len() {
+        let j = sc.ties[k].0 as usize;
+        let (mut f, mut m) = (sc.force[j], sc.mass[j]);
+        while k < sc.ties.len() && sc.ties[k].0 as usize == j {
+            f -= sc.ties[k].1;
+            m += sc.ties[k].2;
+            k += 1;
+        }
+        sc.acceleration[j] = f / m;
+        impulse += (sc.mass[j] * sc.acceleration[j] - sc.force[j]) * dt;
+    }
+    impulse
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -93,6 +131,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let consistent = self.config.mass == MassMatrix::Consistent;
         sc.held.clear();
         sc.consistent.constrained.clear();
+        sc.consistent.fixed_ghosts.clear();
+        if !consistent {
+            impulse += tie_fixed_ghosts(sc, small, dt);
+        }
         for b in &sc.boundary {
             let i = b.node as usize;
             let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
@@ -105,7 +147,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // for (it is the wall node's neighbour, which must feel the wall) and the ghost
                 // follows it afterwards (`mirror_fixed_ghosts`).
                 sc.consistent.constrained.push(b.node);
-                sc.consistent.constrained.extend(b.mirror.filter(|m| !m.fixed).map(|m| m.image));
+                match b.mirror {
+                    Some(m) if m.fixed => sc.consistent.fixed_ghosts.push((b.node, m.image)),
+                    Some(m) => sc.consistent.constrained.push(m.image),
+                    None => {}
+                }
             }
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
@@ -115,7 +161,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
                     if m.fixed {
                         // A fixed plane: the velocity field is antisymmetric across it, so the
-                        // ghost is its image mirrored, in velocity and acceleration. Setting only
+                        // ghost is its image mirrored, in velocity and acceleration (the image's
+                        // tied to it already: `tie_fixed_ghosts`, or the re-solve). Setting only
                         // a_i = (−v_image^L − v_i)/Δt would hand the particles near the wall,
                         // through FLIP (eq 7), the whole gap between the one-sided P2G velocity
                         // at the ghost and the mirrored one at every step: a kick that does not
@@ -179,10 +226,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.constraint += constraint;
         self.dissipation.impulse += impulse;
         self.resolve_constrained()?;
-        if consistent && self.mirror_fixed_ghosts() {
-            // The images behind fixed planes moved in the re-solve and their ghosts follow; the
-            // ghosts carry mass (B-splines), so a second re-solve lets the free nodes feel them.
-            self.resolve_constrained()?;
+        if consistent {
             self.mirror_fixed_ghosts();
         }
         Ok(())
@@ -190,19 +234,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// under the consistent mass matrix, after the re-solve: every held ghost behind a fixed
     /// plane takes its image's re-solved acceleration, mirrored (its velocity already mirrors
-    /// the image's, which the re-solve leaves). True when there was such a ghost.
-    fn mirror_fixed_ghosts(&mut self) -> bool {
+    /// the image's, which the re-solve leaves). The re-solve tied most of them already; this
+    /// covers the ghosts it could not tie (module docs of `mass.rs`).
+    fn mirror_fixed_ghosts(&mut self) {
         let sc = &mut self.scratch;
-        let mut any = false;
-        for b in &sc.boundary {
-            let Some(m) = b.mirror.filter(|m| m.fixed) else { continue };
-            if held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]).is_empty() {
-                continue;
-            }
-            sc.acceleration[b.node as usize] = -sc.acceleration[m.image as usize];
-            any = true;
+        for &(g, j) in &sc.consistent.fixed_ghosts {
+            sc.acceleration[g as usize] = -sc.acceleration[j as usize];
         }
-        any
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.

@@ -16,10 +16,12 @@
 //! coupled matrix the held nodes' neighbours must feel the constrained motion, the free nodes are
 //! solved again with the held ones' accelerations prescribed (`resolve_constrained`; without it
 //! the fixed end of the vibrating bar shortened its period by 1.5 %, measured). A held ghost
-//! node's image is prescribed as well, so that the ghost still mirrors its final value; behind a
+//! node's image is prescribed as well, so that the ghost still mirrors its final value. Behind a
 //! fixed plane the image is solved for instead (it neighbours the wall node, which it must feel:
 //! prescribed, uGIMP had 8× the error of bilinear functions on the manufactured solution) and
-//! the ghost takes its mirrored acceleration after the re-solve, which runs twice. The boundary
+//! the ghost is tied to it, a_g = −a_j: the re-solve's system is TᵀMT for that tie (the method
+//! of images: row j takes row g mirrored), which brought quadratic B-splines from first to second
+//! order on the manufactured solution; the lumped grid solve ties them the same way. The boundary
 //! impulse the ledger books is still the contact law's at the held node (lumped mass), so with
 //! boundaries the momentum balance holds to that approximation, without them to rounding.
 //!
@@ -121,6 +123,12 @@ pub(crate) struct ConsistentScratch {
     product: Vec<Vector>,
     /// Boundary nodes a plane held in this step's grid solve.
     pub(crate) constrained: Vec<u32>,
+    /// (ghost, image) of the held ghost nodes behind fixed planes in this step's grid solve: in
+    /// the re-solve each ghost is its image mirrored, a_ghost = −a_image (`resolve_constrained`).
+    pub(crate) fixed_ghosts: Vec<(u32, u32)>,
+    /// The pairs of `fixed_ghosts` the current solve ties (both solved for): empty outside the
+    /// re-solve.
+    slaves: Vec<(u32, u32)>,
     /// Conjugate-gradient iterations over the run (all solves).
     pub(crate) iterations: u64,
 }
@@ -280,15 +288,25 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if self.config.mass != MassMatrix::Consistent || cm.constrained.is_empty() {
             return Ok(());
         }
+        // A ghost behind a fixed plane that carries mass (B-splines) is tied to its image, so
+        // the system solved is TᵀMT with T the tie a_ghost = −a_image: the image's row takes
+        // the ghost's row, mirrored (the method of images). Ties where either node is not
+        // solved for (an image that is itself held, a ghost below the small-mass threshold,
+        // whose coupling is on the image's diagonal already) leave the ghost to follow after.
+        cm.slaves.clear();
+        cm.slaves.extend(cm.fixed_ghosts.iter().filter(|&&(g, _)| cm.free[g as usize]));
         for &i in &cm.constrained {
             cm.free[i as usize] = false;
         }
+        let free = &cm.free;
+        cm.slaves.retain(|&(_, j)| free[j as usize]);
         let sc = &mut self.scratch;
         sc.consistent.rhs.copy_from_slice(&sc.force);
         let mut x = std::mem::take(&mut sc.acceleration);
         let result = self.solve_consistent(&mut x, Solve::Acceleration);
         let sc = &mut self.scratch;
         sc.acceleration = x;
+        sc.consistent.slaves.clear();
         // The held nodes are prescribed for this solve only: the remap's projection solves for
         // every node above the small-mass threshold again.
         let small = self.small_mass;
@@ -314,6 +332,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             let cols = &neighbours[i * band..][..band];
             row.iter().zip(cols).fold(Vector::ZERO, |s, (&a, &j)| s + a * v[j as usize])
         };
+        // Tied ghosts (re-solve only): x_g = −x_j in every vector the matrix multiplies, and the
+        // image's row gets the ghost's, mirrored (Tᵀ: row j minus row g). Serial: a few nodes.
+        let slaves = &cm.slaves[..];
+        let tie = |v: &mut [Vector]| {
+            for &(g, j) in slaves {
+                v[g as usize] = -v[j as usize];
+            }
+        };
+        tie(x);
         // r = b − M x; z = r / m; p = z.
         {
             let (xr, b) = (&*x, &cm.rhs[..]);
@@ -323,6 +350,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     *r = if free[i] { b[i] - multiply(i, xr) } else { Vector::ZERO };
                 }
             });
+            for &(g, j) in slaves {
+                cm.residual[j as usize] -= b[g as usize] - multiply(g as usize, xr);
+            }
         }
         let rhs = chunked_sum(n, |range| {
             range
@@ -332,6 +362,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         for ((p, &r), &m) in cm.direction.iter_mut().zip(&cm.residual).zip(mass) {
             *p = if m > 0.0 { r / m } else { Vector::ZERO };
         }
+        tie(&mut cm.direction);
         let mut rz = chunked_sum(n, |range| {
             range.fold(Vector::ZERO, |s, i| s + cm.residual[i] * cm.direction[i])
         });
@@ -360,6 +391,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     *q = if free[i] { multiply(i, direction) } else { Vector::ZERO };
                 }
             });
+            for &(g, j) in slaves {
+                cm.product[j as usize] -= multiply(g as usize, direction);
+            }
             let pq = chunked_sum(n, |range| {
                 range.fold(Vector::ZERO, |s, i| s + cm.direction[i] * cm.product[i])
             });
@@ -394,6 +428,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     *p = if free[i] { residual[i] / mass[i] + beta * *p } else { Vector::ZERO };
                 }
             });
+            tie(&mut cm.direction);
         }
         cm.iterations += iterations as u64;
         Ok(())
