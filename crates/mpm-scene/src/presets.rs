@@ -24,30 +24,30 @@ pub struct PresetSettings {
 }
 
 /// The table: (preset, settings), measured by `cargo xtask study` (README, "Speed and accuracy"):
-/// fast: sliding block 0.047 %, bar 0.776 %, flume 1.152 % (worse of error and energy residual), 0.89 s.
-/// balanced: sliding block 0.017 %, bar 1.671 %, flume 1.325 % (worse of error and energy residual), 3.48 s.
-/// accurate: sliding block 0.017 %, bar 1.671 %, flume 1.325 % (worse of error and energy residual), 3.48 s.
+/// fast: sliding block 0.156 %, bar 0.876 %, flume 13.076 % (worse of error and energy residual), 0.53 s.
+/// balanced: sliding block 0.091 %, bar 0.839 %, flume 13.076 % (worse of error and energy residual), 0.53 s.
+/// accurate: sliding block 0.017 %, bar 0.358 %, flume 9.682 % (worse of error and energy residual), 3.81 s.
 pub const PRESETS: [(Preset, PresetSettings); 3] = [
     (
         Preset::Fast,
         PresetSettings {
-            scheme: Scheme::Musl,
-            shape_function: ShapeFunctionKind::Gimp,
-            courant: 0.2,
+            scheme: Scheme::Usavg,
+            shape_function: ShapeFunctionKind::Bspline,
+            courant: 0.4,
         },
     ),
     (
         Preset::Balanced,
         PresetSettings {
-            scheme: Scheme::Musl,
-            shape_function: ShapeFunctionKind::Bspline,
-            courant: 0.05,
+            scheme: Scheme::Usavg,
+            shape_function: ShapeFunctionKind::Gimp,
+            courant: 0.4,
         },
     ),
     (
         Preset::Accurate,
         PresetSettings {
-            scheme: Scheme::Musl,
+            scheme: Scheme::Usavg,
             shape_function: ShapeFunctionKind::Bspline,
             courant: 0.05,
         },
