@@ -262,9 +262,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) node_planes: Vec<NodePlane>,
     /// The planes holding one node, gathered for the contact law (reused).
     pub(crate) plane_buf: Vec<Boundary>,
-    /// (image, ghost force, ghost mass) of the ghosts behind fixed planes that the lumped grid
-    /// solve ties to their images (`stages/grid.rs`, reused).
-    pub(crate) ties: Vec<(u32, Vector, Real)>,
+    /// (image, ghost force, ghost mass, books the impulse) of the ghosts behind fixed planes that
+    /// the lumped grid solve ties to their images (`stages/grid.rs`, reused).
+    pub(crate) ties: Vec<(u32, Vector, Real, bool)>,
     /// The arrays below `first_node` describe the current `first_node` (false before the first
     /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
@@ -357,7 +357,7 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.boundary.capacity() * size_of::<BoundaryNode>()
             + self.node_planes.capacity() * size_of::<NodePlane>()
             + self.plane_buf.capacity() * size_of::<Boundary>()
-            + self.ties.capacity() * size_of::<(u32, Vector, Real)>()
+            + self.ties.capacity() * size_of::<(u32, Vector, Real, bool)>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
             + self.consistent.heap_bytes()
     }
@@ -706,6 +706,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// [`Solver::step_capped`]'s step, on whatever thread calls it.
     fn advance(&mut self, max_dt: Real) -> Result<StepReport, SolverError> {
+        if !self.body_force.is_empty() && self.body_force.len() != self.particles.len() {
+            return Err(SolverError::InvalidSetting {
+                name: "body_force",
+                value: self.body_force.len() as f64,
+                expected: "one body force per particle: set it again after adding or removing \
+                           particles",
+            });
+        }
         let (dt, courant) = self.time_step(max_dt)?;
         // While gravity ramps, its potential −m g(t)·x changes at fixed x: that is external work,
         // Σ −m_p Δg·x_p at mid-step positions (the forces use g at mid-step too).

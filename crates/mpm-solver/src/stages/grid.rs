@@ -36,7 +36,8 @@ pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) 
 /// next to the wall feel material on one side only, and B-splines converged at first order on the
 /// manufactured solution. Ghosts and images below the small-mass threshold are left alone; several
 /// ghosts of one image all add. Returns the impulse the tie gives the material at the images,
-/// Σ (m_j a_j − f_j) Δt (the ghost's share is booked with its mirror in the grid solve).
+/// Σ (m_j a_j − f_j) Δt (the ghost's share is booked by `mirror_fixed_ghosts`; with periodic
+/// sides a pair's partner books it).
 fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: Real) -> Vector {
     sc.ties.clear();
     for b in &sc.boundary {
@@ -46,7 +47,7 @@ fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: 
         }
         let (g, j) = (b.node as usize, m.image as usize);
         if sc.mass[g] > small && sc.mass[j] > small {
-            sc.ties.push((m.image, sc.force[g], sc.mass[g]));
+            sc.ties.push((m.image, sc.force[g], sc.mass[g], b.partner.is_none()));
         }
     }
     // stable: the ghosts of one image add in boundary order, whatever the threads
@@ -55,14 +56,16 @@ fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: 
     let mut k = 0;
     while k < sc.ties.len() {
         let j = sc.ties[k].0 as usize;
-        let (mut f, mut m) = (sc.force[j], sc.mass[j]);
+        let (mut f, mut m, book) = (sc.force[j], sc.mass[j], sc.ties[k].3);
         while k < sc.ties.len() && sc.ties[k].0 as usize == j {
             f -= sc.ties[k].1;
             m += sc.ties[k].2;
             k += 1;
         }
         sc.acceleration[j] = f / m;
-        impulse += (sc.mass[j] * sc.acceleration[j] - sc.force[j]) * dt;
+        if book {
+            impulse += (sc.mass[j] * sc.acceleration[j] - sc.force[j]) * dt;
+        }
     }
     impulse
 }
@@ -147,11 +150,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // for (it is the wall node's neighbour, which must feel the wall) and the ghost
                 // follows it afterwards (`mirror_fixed_ghosts`).
                 sc.consistent.constrained.push(b.node);
-                match b.mirror {
-                    Some(m) if m.fixed => sc.consistent.fixed_ghosts.push((b.node, m.image)),
-                    Some(m) => sc.consistent.constrained.push(m.image),
-                    None => {}
-                }
+                sc.consistent.constrained.extend(b.mirror.filter(|m| !m.fixed).map(|m| m.image));
             }
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
@@ -160,18 +159,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let j = m.image as usize;
                     let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
                     if m.fixed {
-                        // A fixed plane: the velocity field is antisymmetric across it, so the
-                        // ghost is its image mirrored, in velocity and acceleration (the image's
-                        // tied to it already: `tie_fixed_ghosts`, or the re-solve). Setting only
-                        // a_i = (−v_image^L − v_i)/Δt would hand the particles near the wall,
-                        // through FLIP (eq 7), the whole gap between the one-sided P2G velocity
-                        // at the ghost and the mirrored one at every step: a kick that does not
-                        // shrink with Δt (B-spline manufactured solution, 8 cells: error 0.15,
-                        // and 1.84 with Δt/32). The kinetic change of replacing v_i is the
-                        // wall's, not the particles'; the impulse is what FLIP passes on.
-                        impulse += sc.mass[i] * (-sc.acceleration[j] - sc.acceleration[i]) * dt;
-                        sc.velocity[i] = -sc.velocity[j];
-                        sc.acceleration[i] = -sc.acceleration[j];
+                        // A fixed plane: the ghost is its image mirrored, once every node
+                        // (its image included, which may be held itself) is final:
+                        // `mirror_fixed_ghosts`.
+                        let book = b.partner.is_none();
+                        let trial = sc.acceleration[i];
+                        sc.consistent.fixed_ghosts.push((b.node, m.image, book, trial));
                         continue;
                     }
                     m.wall_velocity(v_image)
@@ -226,21 +219,39 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.constraint += constraint;
         self.dissipation.impulse += impulse;
         self.resolve_constrained()?;
-        if consistent {
-            self.mirror_fixed_ghosts();
-        }
+        // twice: a corner ghost's image can be a ghost itself
+        let impulse = self.mirror_fixed_ghosts(dt, true) + self.mirror_fixed_ghosts(dt, false);
+        self.dissipation.impulse += impulse;
         Ok(())
     }
 
-    /// under the consistent mass matrix, after the re-solve: every held ghost behind a fixed
-    /// plane takes its image's re-solved acceleration, mirrored (its velocity already mirrors
-    /// the image's, which the re-solve leaves). The re-solve tied most of them already; this
-    /// covers the ghosts it could not tie (module docs of `mass.rs`).
-    fn mirror_fixed_ghosts(&mut self) {
+    /// every held ghost behind a fixed plane becomes its image mirrored: the velocity field is
+    /// antisymmetric across the plane, so v_g = −v_j and a_g = −a_j (the image's acceleration
+    /// tied to the ghost already: `tie_fixed_ghosts`, or the consistent re-solve). Setting only
+    /// a_g = (−v_j^L − v_g)/Δt, as before, handed the particles near the wall, through FLIP
+    /// (eq 7), the whole gap between the one-sided P2G velocity at the ghost and the mirrored one
+    /// at every step: a kick that does not shrink with Δt (B-spline manufactured solution,
+    /// 8 cells: error 0.15 of A, 1.84 with Δt/32). Returns the impulse this gives the particles,
+    /// m_g Δa_g Δt from the ghost's trial acceleration (`first`; the re-solve may have moved it
+    /// since) or from the last pass, and under APIC (whose particles take v^L) also m_g Δv_g; a
+    /// periodic image's partner books the pair's.
+    fn mirror_fixed_ghosts(&mut self, dt: Real, first: bool) -> Vector {
+        let apic = self.config.transfer == crate::config::Transfer::Apic;
         let sc = &mut self.scratch;
-        for &(g, j) in &sc.consistent.fixed_ghosts {
-            sc.acceleration[g as usize] = -sc.acceleration[j as usize];
+        let mut impulse = Vector::ZERO;
+        for &(g, j, book, trial) in &sc.consistent.fixed_ghosts {
+            let (g, j) = (g as usize, j as usize);
+            let (a, v) = (-sc.acceleration[j], -sc.velocity[j]);
+            if book {
+                let before = if first { trial } else { sc.acceleration[g] };
+                impulse += sc.mass[g] * (a - before) * dt;
+                if apic {
+                    impulse += sc.mass[g] * (v - sc.velocity[g]);
+                }
+            }
+            (sc.acceleration[g], sc.velocity[g]) = (a, v);
         }
+        impulse
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
