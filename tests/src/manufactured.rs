@@ -87,6 +87,19 @@ pub fn body_force(a: f64, n: u32, x: f64, t: f64) -> f64 {
     -a * w * w * sx * st - E / RHO * df / f
 }
 
+/// The discretisation the verification and the study refine: MUSL, 2 × 2 particles per cell,
+/// Δt of C = 0.1 on the [`REFERENCE_CELL`], bilinear, lumped, 1/8 m cells.
+pub fn baseline() -> Discretisation {
+    Discretisation {
+        cell: 0.125,
+        ppc: 2,
+        scheme: mpm_solver::Scheme::Musl,
+        shape: crate::ShapeKind::Bilinear,
+        courant: 0.1,
+        mass: crate::MassMatrix::Lumped,
+    }
+}
+
 /// What a run measured at [`end_time`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Manufactured {

@@ -165,14 +165,7 @@ fn plans(quick: bool) -> Vec<Plan> {
         // every level, so the ladder measures the spatial error.
         Plan {
             case: Case::Manufactured,
-            baseline: Discretisation {
-                cell: 0.125,
-                ppc: 2,
-                scheme: Scheme::Musl,
-                shape: ShapeKind::Bilinear,
-                courant: 0.1,
-                mass: MassMatrix::Lumped,
-            },
+            baseline: mpm_tests::manufactured::baseline(),
             cells: ladder(&[0.125, 0.0625, 0.03125, 0.015625], 3),
             shapes: ShapeKind::ALL.to_vec(),
         },

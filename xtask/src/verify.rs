@@ -771,14 +771,7 @@ fn geostatic_rows(rows: &mut Rows) {
 fn manufactured_rows(rows: &mut Rows) {
     use mpm_tests::manufactured::{AMPLITUDE, Manufactured, manufactured_at};
     let cells = [1.0 / 16.0, 1.0 / 32.0, 1.0 / 64.0];
-    let base = Discretisation {
-        cell: 0.125,
-        ppc: 2,
-        scheme: Scheme::Musl,
-        shape: ShapeKind::Bilinear,
-        courant: 0.1,
-        mass: MassMatrix::Lumped,
-    };
+    let base = mpm_tests::manufactured::baseline();
     let ladder = |shape, mass, a| -> Result<Vec<Manufactured>, mpm_tests::CaseError> {
         let run = |cell| manufactured_at(&Discretisation { cell, shape, mass, ..base }, a);
         cells.iter().map(|&cell| run(cell)).collect()

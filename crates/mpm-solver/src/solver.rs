@@ -158,6 +158,19 @@ impl BoundaryNode {
     }
 }
 
+/// A held ghost node behind a fixed plane: it ends the grid solve as its image mirrored
+/// (`stages/grid.rs`), and the particles' momentum changes by m_g times its change from the trial
+/// values, which the ledger books.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FixedGhost {
+    pub(crate) ghost: u32,
+    pub(crate) image: u32,
+    /// false for a periodic image, whose partner books the pair's impulse
+    pub(crate) books: bool,
+    /// the ghost's acceleration and velocity before the boundary conditions
+    pub(crate) trial: (Vector, Vector),
+}
+
 /// One plane near a boundary node, placed as a [`Wall`]: a grid side passes through the node (or,
 /// for a ghost node, halfway to its image), a declared wall lies wherever the scene put it.
 #[derive(Clone, Copy, Debug)]
@@ -265,6 +278,8 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// (image, ghost force, ghost mass, books the impulse) of the ghosts behind fixed planes that
     /// the lumped grid solve ties to their images (`stages/grid.rs`, reused).
     pub(crate) ties: Vec<(u32, Vector, Real, bool)>,
+    /// The held ghost nodes behind fixed planes in this step's grid solve (either matrix).
+    pub(crate) fixed_ghosts: Vec<FixedGhost>,
     /// The arrays below `first_node` describe the current `first_node` (false before the first
     /// locate, after a failed one, and after a stress update that changed some node ids).
     pub(crate) located: bool,
@@ -318,6 +333,7 @@ impl<F, const N: usize> Scratch<F, N> {
             node_planes: Vec::new(),
             plane_buf: Vec::new(),
             ties: Vec::new(),
+            fixed_ghosts: Vec::new(),
             located: false,
             stencils_ahead: None,
             saved: Vec::new(),
@@ -358,6 +374,7 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.node_planes.capacity() * size_of::<NodePlane>()
             + self.plane_buf.capacity() * size_of::<Boundary>()
             + self.ties.capacity() * size_of::<(u32, Vector, Real, bool)>()
+            + self.fixed_ghosts.capacity() * size_of::<FixedGhost>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
             + self.consistent.heap_bytes()
     }

@@ -3,13 +3,12 @@
 //! The orders of every shape function and mass matrix are in `cargo xtask verify | study`; these
 //! tests hold the properties the fixed walls once broke.
 
-use mpm_solver::Scheme;
-use mpm_tests::manufactured::{AMPLITUDE, manufactured_at, manufactured_mode};
+use mpm_tests::manufactured::{AMPLITUDE, baseline, manufactured_at, manufactured_mode};
 use mpm_tests::{Discretisation, MassMatrix, ShapeKind};
 
-/// MUSL, 2 × 2 particles per cell, Δt of C = 0.1 on a 1/1024 m grid (the driver's reference).
+/// The driver's baseline (MUSL, 2 × 2 particles per cell, Δt of C = 0.1 on a 1/1024 m grid).
 fn at(cell: f64, shape: ShapeKind, mass: MassMatrix) -> Discretisation {
-    Discretisation { cell, ppc: 2, scheme: Scheme::Musl, shape, courant: 0.1, mass }
+    Discretisation { cell, shape, mass, ..baseline() }
 }
 
 /// At A = 1e-4 no particle crosses a cell and the strains are small: uGIMP and B-splines

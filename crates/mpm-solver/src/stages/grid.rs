@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use crate::config::{Contact, MassMatrix};
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::solver::{NodePlane, Scratch, Solver};
+use crate::solver::{FixedGhost, NodePlane, Scratch, Solver};
 
 /// the planes of `planes` that hold their node this step, gathered into `buf` for the contact law.
 pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {
@@ -134,7 +134,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let consistent = self.config.mass == MassMatrix::Consistent;
         sc.held.clear();
         sc.consistent.constrained.clear();
-        sc.consistent.fixed_ghosts.clear();
+        sc.fixed_ghosts.clear();
         if !consistent {
             impulse += tie_fixed_ghosts(sc, small, dt);
         }
@@ -155,19 +155,20 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             // A ghost node meets a wall moving with its image's mirrored normal velocity (images
             // are interior nodes, final above); a node on the plane meets a wall at rest.
             let wall = match b.mirror {
+                Some(m) if m.fixed => {
+                    // A fixed plane: the ghost is its image mirrored, once every node (its image
+                    // included, which may be held itself) is final: `mirror_fixed_ghosts`.
+                    sc.fixed_ghosts.push(FixedGhost {
+                        ghost: b.node,
+                        image: m.image,
+                        books: b.partner.is_none(),
+                        trial: (sc.acceleration[i], sc.velocity[i]),
+                    });
+                    continue;
+                }
                 Some(m) => {
                     let j = m.image as usize;
-                    let v_image = sc.velocity[j] + sc.acceleration[j] * dt;
-                    if m.fixed {
-                        // A fixed plane: the ghost is its image mirrored, once every node
-                        // (its image included, which may be held itself) is final:
-                        // `mirror_fixed_ghosts`.
-                        let book = b.partner.is_none();
-                        let trial = sc.acceleration[i];
-                        sc.consistent.fixed_ghosts.push((b.node, m.image, book, trial));
-                        continue;
-                    }
-                    m.wall_velocity(v_image)
+                    m.wall_velocity(sc.velocity[j] + sc.acceleration[j] * dt)
                 }
                 None => Vector::ZERO,
             };
@@ -219,9 +220,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.constraint += constraint;
         self.dissipation.impulse += impulse;
         self.resolve_constrained()?;
-        // twice: a corner ghost's image can be a ghost itself
-        let impulse = self.mirror_fixed_ghosts(dt, true) + self.mirror_fixed_ghosts(dt, false);
-        self.dissipation.impulse += impulse;
+        self.mirror_fixed_ghosts(dt);
         Ok(())
     }
 
@@ -231,27 +230,26 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// a_g = (−v_j^L − v_g)/Δt, as before, handed the particles near the wall, through FLIP
     /// (eq 7), the whole gap between the one-sided P2G velocity at the ghost and the mirrored one
     /// at every step: a kick that does not shrink with Δt (B-spline manufactured solution,
-    /// 8 cells: error 0.15 of A, 1.84 with Δt/32). Returns the impulse this gives the particles,
-    /// m_g Δa_g Δt from the ghost's trial acceleration (`first`; the re-solve may have moved it
-    /// since) or from the last pass, and under APIC (whose particles take v^L) also m_g Δv_g; a
-    /// periodic image's partner books the pair's.
-    fn mirror_fixed_ghosts(&mut self, dt: Real, first: bool) -> Vector {
+    /// 8 cells: error 0.15 of A, 1.84 with Δt/32). Two passes: a corner ghost's image can be a
+    /// ghost itself. The ledger books the impulse this gives the particles, m_g Δa_g Δt from the
+    /// trial values, and under APIC (whose particles take v^L) also m_g Δv_g.
+    fn mirror_fixed_ghosts(&mut self, dt: Real) {
         let apic = self.config.transfer == crate::config::Transfer::Apic;
         let sc = &mut self.scratch;
-        let mut impulse = Vector::ZERO;
-        for &(g, j, book, trial) in &sc.consistent.fixed_ghosts {
-            let (g, j) = (g as usize, j as usize);
-            let (a, v) = (-sc.acceleration[j], -sc.velocity[j]);
-            if book {
-                let before = if first { trial } else { sc.acceleration[g] };
-                impulse += sc.mass[g] * (a - before) * dt;
-                if apic {
-                    impulse += sc.mass[g] * (v - sc.velocity[g]);
-                }
+        for _ in 0..2 {
+            for f in &sc.fixed_ghosts {
+                let (g, j) = (f.ghost as usize, f.image as usize);
+                (sc.acceleration[g], sc.velocity[g]) = (-sc.acceleration[j], -sc.velocity[j]);
             }
-            (sc.acceleration[g], sc.velocity[g]) = (a, v);
         }
-        impulse
+        for f in sc.fixed_ghosts.iter().filter(|f| f.books) {
+            let (g, (a, v)) = (f.ghost as usize, f.trial);
+            let mut dp = sc.mass[g] * (sc.acceleration[g] - a) * dt;
+            if apic {
+                dp += sc.mass[g] * (sc.velocity[g] - v);
+            }
+            self.dissipation.impulse += dp;
+        }
     }
 
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.

@@ -123,13 +123,8 @@ pub(crate) struct ConsistentScratch {
     product: Vec<Vector>,
     /// Boundary nodes a plane held in this step's grid solve.
     pub(crate) constrained: Vec<u32>,
-    /// (ghost, image, books the impulse: not a periodic partner) of the held ghost nodes behind
-    /// fixed planes in this step's grid solve (either matrix): each ghost is its image mirrored,
-    /// a_ghost = −a_image, tied in the re-solve (`resolve_constrained`).
-    /// The last entry is the ghost's trial acceleration, from which its impulse is booked.
-    pub(crate) fixed_ghosts: Vec<(u32, u32, bool, Vector)>,
-    /// The pairs of `fixed_ghosts` the current solve ties (both solved for): empty outside the
-    /// re-solve.
+    /// (ghost, image) of the held ghosts behind fixed planes (`Scratch::fixed_ghosts`) that the
+    /// current solve ties, a_ghost = −a_image (both solved for): empty outside the re-solve.
     slaves: Vec<(u32, u32)>,
     /// Conjugate-gradient iterations over the run (all solves).
     pub(crate) iterations: u64,
@@ -295,17 +290,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // the ghost's row, mirrored (the method of images). Ties where either node is not
         // solved for (an image that is itself held, a ghost below the small-mass threshold,
         // whose coupling is on the image's diagonal already) leave the ghost to follow after.
-        cm.slaves.clear();
+        // (a held ghost is in `constrained`: not solved for, the tie moves it)
         let free = &cm.free;
-        cm.slaves.extend(
-            cm.fixed_ghosts.iter().filter(|t| free[t.0 as usize]).map(|&(g, j, _, _)| (g, j)),
-        );
+        let tied = self.scratch.fixed_ghosts.iter().map(|f| (f.ghost, f.image));
+        cm.slaves.clear();
+        cm.slaves.extend(tied.filter(|&(g, _)| free[g as usize]));
         for &i in &cm.constrained {
             cm.free[i as usize] = false;
-        }
-        // a ghost is held, so not solved for: it is the tie that moves it
-        for &(g, _) in &cm.slaves {
-            cm.free[g as usize] = false;
         }
         let free = &cm.free;
         cm.slaves.retain(|&(_, j)| free[j as usize]);
