@@ -835,10 +835,16 @@ fn manufactured_rows(rows: &mut Rows) {
         }
     }
     // Mode 3 (even about the middle): in mode 2 the impulses cancel by symmetry whatever the
-    // walls book. Lumped only: the consistent matrix books the walls' impulse at lumped masses.
-    for shape in [ShapeKind::Gimp, ShapeKind::BSpline] {
-        let case = format!("manufactured solution mode 3 {} lumped 1/16 m", shape.name());
-        let d = Discretisation { cell: 1.0 / 16.0, shape, ..base };
+    // walls book.
+    for (shape, mass) in [
+        (ShapeKind::Gimp, MassMatrix::Lumped),
+        (ShapeKind::BSpline, MassMatrix::Lumped),
+        (ShapeKind::Gimp, MassMatrix::Consistent),
+        (ShapeKind::BSpline, MassMatrix::Consistent),
+    ] {
+        let matrix = if mass == MassMatrix::Lumped { "lumped" } else { "consistent" };
+        let case = format!("manufactured solution mode 3 {} {matrix} 1/16 m", shape.name());
+        let d = Discretisation { cell: 1.0 / 16.0, shape, mass, ..base };
         match mpm_tests::manufactured::manufactured_mode(&d, AMPLITUDE, 3) {
             Ok(m) => rows.at_most(
                 (&case, "|Δp − body force impulse − walls' impulse| / Σ m|b|Δt"),

@@ -205,8 +205,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             // what closes the ledger; the split along the first held plane's normal is indicative
             // only, and either part can be negative in a step where a pressed node was moving
             // away from the wall.
-            if b.partner.is_some() {
-                // a periodic image: its partner, holding the same sums, books the pair's work.
+            if b.partner.is_some() || consistent {
+                // a periodic image: its partner, holding the same sums, books the pair's work;
+                // with the consistent matrix `book_reactions` books every node's once final.
                 continue;
             }
             impulse += out.impulse;
@@ -221,6 +222,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.impulse += impulse;
         self.resolve_constrained()?;
         self.mirror_fixed_ghosts(dt);
+        self.book_reactions(dt);
         Ok(())
     }
 
@@ -241,6 +243,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 let (g, j) = (f.ghost as usize, f.image as usize);
                 (sc.acceleration[g], sc.velocity[g]) = (-sc.acceleration[j], -sc.velocity[j]);
             }
+        }
+        if self.config.mass == MassMatrix::Consistent {
+            return; // `book_reactions` books them
         }
         for f in sc.fixed_ghosts.iter().filter(|f| f.books) {
             let (g, (a, v)) = (f.ghost as usize, f.trial);
