@@ -12,7 +12,7 @@ use mpm_cli::{RunOptions, RunStatus, RunSummary, run_scene};
 use mpm_scene::file::ShapeFunctionKind;
 use mpm_scene::{Scene, embedded_scene, load_scene_str};
 use mpm_solver::Scheme;
-use mpm_tests::{Cost, Discretisation, ShapeKind};
+use mpm_tests::{Cost, Discretisation, MassMatrix, ShapeKind};
 
 use crate::runs::{Case, Run};
 use crate::table::{Status, Table, num, pct};
@@ -46,6 +46,7 @@ fn run(base: &Scene, d: &Discretisation) -> Result<RunSummary, String> {
             f.solver.scheme = Some(d.scheme);
             f.solver.shape_function = Some(ShapeFunctionKind::Bilinear);
             f.solver.courant = Some(d.courant);
+            f.solver.mass = Some(d.mass);
             f.solver.dt = None;
         })
         .map_err(|e| e.to_string())?;
@@ -80,9 +81,21 @@ fn finite(s: &RunSummary) -> bool {
     .all(|v| v.is_finite())
 }
 
-/// the flume rows of `verify`: the embedded scene as it is (0.1 m cells, USAVG, C = 0.1).
+/// the flume rows of `verify`: the embedded scene as it is (0.1 m cells, USAVG, C = 0.1), with
+/// the lumped and with the consistent mass matrix.
 pub fn verify_rows(table: &mut Table, notes: &mut String) {
-    let case = "flume (§7), embedded scene";
+    for mass in [MassMatrix::Lumped, MassMatrix::Consistent] {
+        verify_with(mass, table, notes);
+    }
+}
+
+fn verify_with(mass: MassMatrix, table: &mut Table, notes: &mut String) {
+    let (case, label) = match mass {
+        MassMatrix::Lumped => ("flume (§7), embedded scene", ""),
+        MassMatrix::Consistent => {
+            ("flume (§7), embedded scene, consistent mass", ", consistent mass matrix")
+        }
+    };
     let mut push = |q: &str,
                     reference: &str,
                     source: &str,
@@ -104,7 +117,8 @@ pub fn verify_rows(table: &mut Table, notes: &mut String) {
             status,
         );
     };
-    let summary = scene().and_then(|s| run(&s, &Discretisation::paper(0.1)));
+    let summary =
+        scene().and_then(|s| run(&s, &Discretisation { mass, ..Discretisation::paper(0.1) }));
     match summary {
         Ok(s) => {
             let r = &s.runout.last;
@@ -149,7 +163,7 @@ pub fn verify_rows(table: &mut Table, notes: &mut String) {
             );
             let _ = writeln!(
                 notes,
-                "## Flume\n\nThe embedded flume scene ({} particles, {} steps, {:.1} s wall): front at x = {} m, front travel {} m, \
+                "## Flume{label}\n\nThe embedded flume scene ({} particles, {} steps, {:.1} s wall): front at x = {} m, front travel {} m, \
                  centre of mass travel {} m, max thickness {} m. There is no exact answer; only finiteness and the energy ledger's \
                  closure are checked.\n",
                 s.particles,
@@ -188,6 +202,10 @@ pub fn study(quick: bool, runs: &mut Vec<Run>) -> String {
         .iter()
         .map(|&cell| ("cell-bilinear".to_string(), Discretisation { cell, ..baseline }))
         .collect();
+    let mass = MassMatrix::Consistent;
+    plan.extend(ladder.iter().map(|&cell| {
+        ("cell-bilinear-consistent".to_string(), Discretisation { cell, mass, ..baseline })
+    }));
     for ppc in 1..=4 {
         plan.push(("ppc".into(), Discretisation { ppc, ..baseline }));
     }

@@ -180,24 +180,15 @@ pub fn run(quick: bool) -> Result<bool> {
     for plan in plans(quick) {
         eprintln!("{}:", plan.case.name());
         let b = plan.baseline;
+        // Refinement ladders per shape function, with the lumped and the consistent mass matrix
+        // (the flume's are in flume.rs).
         for &shape in &plan.shapes {
-            for &cell in &plan.cells {
-                runner.run(
-                    plan.case,
-                    &format!("cell-{}", shape.name()),
-                    Discretisation { cell, shape, ..b },
-                );
-            }
-        }
-        // The consistent mass matrix's ladder: the same cells and shapes, for the cases whose
-        // error it is meant to reduce (the bar's wave, the manufactured solution; not the
-        // granular or frictional cases, see the README).
-        if matches!(plan.case, Case::Bar | Case::Manufactured) {
-            for &shape in &plan.shapes {
+            for (mass, suffix) in
+                [(MassMatrix::Lumped, ""), (MassMatrix::Consistent, "-consistent")]
+            {
                 for &cell in &plan.cells {
-                    let mass = MassMatrix::Consistent;
                     let d = Discretisation { cell, shape, mass, ..b };
-                    runner.run(plan.case, &format!("cell-{}-consistent", shape.name()), d);
+                    runner.run(plan.case, &format!("cell-{}{suffix}", shape.name()), d);
                 }
             }
         }
