@@ -112,8 +112,7 @@ pub struct Manufactured {
     pub energy_residual: f64,
     /// |p(t) − p(0) − body force impulse − boundary impulse| relative to Σ_steps Σ_p m_p |b_p| Δt
     /// (the net impulses nearly cancel, the field being odd about the middle): the momentum
-    /// balance (exact with the lumped matrix; the consistent one books the
-    /// walls' impulse at the lumped masses)
+    /// balance (to rounding with either matrix)
     pub momentum_error: f64,
     /// steps and particles
     pub cost: Cost,

@@ -233,8 +233,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// (eq 7), the whole gap between the one-sided P2G velocity at the ghost and the mirrored one
     /// at every step: a kick that does not shrink with Δt (B-spline manufactured solution,
     /// 8 cells: error 0.15 of A, 1.84 with Δt/32). Two passes: a corner ghost's image can be a
-    /// ghost itself. The ledger books the impulse this gives the particles, m_g Δa_g Δt from the
-    /// trial values, and under APIC (whose particles take v^L) also m_g Δv_g.
+    /// ghost itself. With the lumped matrix the ledger books the impulse this gives the
+    /// particles, m_g Δa_g Δt from the trial values, and under APIC (whose particles take v^L)
+    /// also m_g Δv_g; the consistent matrix's `book_reactions` books it with every reaction.
     fn mirror_fixed_ghosts(&mut self, dt: Real) {
         let apic = self.config.transfer == crate::config::Transfer::Apic;
         let sc = &mut self.scratch;

@@ -25,8 +25,9 @@
 //! books the reactions r = M a − f once every node is final (`book_reactions`), so the momentum
 //! balance holds to rounding with boundaries too.
 //!
-//! A node that a frictional or frictionless plane holds in this step keeps its lumped row (is
-//! not solved for; nor is the image of a ghost behind such a plane): the Coulomb law (eqs
+//! A node that a Coulomb (frictional or frictionless) or rough plane holds in this step keeps its
+//! lumped row (is not solved for; nor is the image of a ghost behind such a plane, unless the
+//! ghost is behind a fixed plane too, whose tie wins): the Coulomb law (eqs
 //! 14–18) computes its normal and friction impulses for a node of mass m_i, and applied to
 //! coupled rows it over-braked. Measured (0.5 m cells, USAVG, C = 0.1): the sliding block of
 //! eq 21 stopped after 16.24 m bilinear and 13.30 m B-spline against 16.99 m (16.98 and 16.98
@@ -225,11 +226,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let small = self.small_mass;
         cm.free.clear();
         cm.free.extend(sc.mass.iter().map(|&m| m > small));
-        // A node a frictional or frictionless plane holds this step keeps its lumped row, and
-        // so does a ghost's image behind such a plane (module docs: the contact law's impulse
-        // is the lumped one).
+        // A node a Coulomb or rough plane holds this step keeps its lumped row, and so does a
+        // ghost's image behind such a plane (module docs: the contact law's impulse is the
+        // lumped one).
         for b in &sc.boundary {
             let sliding = |p: &NodePlane| p.held && p.wall.boundary().friction() != Friction::Fixed;
+            // (a ghost behind a fixed plane is its image mirrored whatever else holds it)
+            if b.mirror.is_some_and(|m| m.fixed) {
+                continue;
+            }
             if sc.node_planes[b.planes()].iter().any(sliding) {
                 cm.free[b.node as usize] = false;
                 if let Some(m) = b.mirror {
@@ -336,6 +341,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let free = &cm.free;
         cm.slaves.retain(|&(_, j)| free[j as usize]);
+        if cm.prescribed.is_empty() {
+            // Only lumped rows are held (sliding planes): no solved row couples to them, so
+            // there is nothing to solve again (and no tie: a tied ghost is held and solved for).
+            cm.slaves.clear();
+            return Ok(());
+        }
         let sc = &mut self.scratch;
         sc.consistent.rhs.copy_from_slice(&sc.force);
         let mut x = std::mem::take(&mut sc.acceleration);
@@ -354,18 +365,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// with the consistent matrix, books the boundary conditions' impulse and work in the ledger
     /// once every node is final: the reaction at node i is r_i = (M a)_i − f_i (m_i a_i − f_i
-    /// on a lumped row), booked where the contact law or a prescription set the acceleration
-    /// (held nodes, prescribed images, tied ghosts and their images); elsewhere it is the
-    /// solver's residual. The rows of M sum to the lumped masses and M is symmetric, so
-    /// Σ_i r_i = Σ_i (m_i a_i − f_i): the momentum balance holds to that residual, which it
-    /// thereby checks (the contact law's own impulse, m_i Δa_i Δt at the lumped mass, was 7–28 %
-    /// off on the manufactured solution, and its work made the flume's ledger gain 60 kJ/m). The work
+    /// on a lumped row, m_i (a_i − g) below the small-mass threshold, whose trial acceleration
+    /// is g), booked where the contact law or a prescription set the acceleration (held nodes,
+    /// prescribed images, tied ghosts and their images); elsewhere it is the solver's residual.
+    /// The rows of M sum to the lumped masses and M is symmetric, so Σ_i r_i = Σ_i (m_i a_i −
+    /// f_i) over the solved nodes: the momentum balance holds to that residual, which it thereby
+    /// checks (the contact law's own impulse, m_i Δa_i Δt at the lumped mass, was 7–28 % off on
+    /// the manufactured solution, and its work made the flume's ledger gain 60 kJ/m). The work
     /// is r_i · (v_i + ½ a_i Δt) Δt, the midpoint rule that closes the grid's kinetic energy
     /// (½ vᵀ M v changes by Δt (f + r) · (v + ½ a Δt)), relative to the moving "wall" of a ghost
-    /// behind a frictional or frictionless plane as the lumped booking does; at a held node
-    /// its part along the first held plane's normal is constraint work, the rest friction
-    /// work, and the remainder (prescribed images, tied ghosts: workless pairs) is constraint
-    /// work. Nodes below the small-mass threshold are left out, as with the lumped matrix.
+    /// behind a Coulomb or rough plane as the lumped booking does; at a held node its part along
+    /// the first held plane's normal is constraint work, the rest friction work, and the
+    /// remainder (prescribed images; a tied ghost and its image do no work together) is
+    /// constraint work.
     pub(crate) fn book_reactions(&mut self, dt: Real) {
         if self.config.mass != MassMatrix::Consistent {
             return;
@@ -385,8 +397,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let (values, neighbours, free) = (&cm.values[..], &cm.neighbours[..], &cm.free[..]);
         let (a, f, v, mass) = (&sc.acceleration[..], &sc.force[..], &sc.velocity[..], &sc.mass[..]);
         let small = self.small_mass;
-        // (M a)_i − f_i, with M's row where the node is solved for and its lumped row elsewhere
+        let g = self.config.gravity_at(self.time + 0.5 * dt);
+        // (M a)_i − f_i, with M's row where the node is solved for and its lumped row elsewhere;
+        // m_i (a_i − g) below the small-mass threshold, whose trial acceleration is g (as the
+        // lumped booking has it)
         let reaction = |i: usize| -> Vector {
+            if mass[i] <= small {
+                return mass[i] * (a[i] - g);
+            }
             if !free[i] {
                 return mass[i] * a[i] - f[i];
             }
@@ -396,18 +414,17 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         };
         // (impulse x, impulse y, work) over them, absolute velocities; elsewhere r_i is the
         // solver's residual, left out, so that the momentum balance checks it is negligible.
-        let total = cm.reacting.iter().map(|&i| i as usize).filter(|&i| mass[i] > small).fold(
-            glam::DVec3::ZERO,
-            |s, i| {
-                let r = reaction(i) * dt;
-                s + r.extend(r.dot(v[i] + 0.5 * dt * a[i]))
-            },
-        );
+        let total = cm.reacting.iter().map(|&i| i as usize).fold(glam::DVec3::ZERO, |s, i| {
+            let r = reaction(i) * dt;
+            s + r.extend(r.dot(v[i] + 0.5 * dt * a[i]))
+        });
+        // The split at the held nodes (periodic sides, whose pairs would be booked twice, are
+        // refused with this matrix). A tied ghost and its image do no work together.
         let (mut work, mut friction) = (total.z, 0.0);
         for b in &sc.boundary {
             let i = b.node as usize;
             let Some(plane) = sc.node_planes[b.planes()].iter().find(|p| p.held) else { continue };
-            if mass[i] <= small || b.partner.is_some() {
+            if b.mirror.is_some_and(|m| m.fixed) {
                 continue;
             }
             let r = reaction(i) * dt;
