@@ -793,7 +793,7 @@ fn manufactured_rows(rows: &mut Rows) {
     // bilinear: no order to bound (it diverges once particles cross cells); reported
     cases.push((ShapeKind::Bilinear, MassMatrix::Lumped, AMPLITUDE, f64::NAN));
     for (shape, mass, a, bound) in cases {
-        let mass_name = if mass == MassMatrix::Lumped { "lumped" } else { "consistent" };
+        let mass_name = mass.name();
         let case = format!("manufactured solution A = {a} m {} {mass_name}", shape.name());
         let runs = ladder(shape, mass, a);
         let errors = runs.as_ref().map(|r| r.iter().map(|m| m.rms_error).collect::<Vec<_>>());
@@ -842,8 +842,7 @@ fn manufactured_rows(rows: &mut Rows) {
         (ShapeKind::Gimp, MassMatrix::Consistent),
         (ShapeKind::BSpline, MassMatrix::Consistent),
     ] {
-        let matrix = if mass == MassMatrix::Lumped { "lumped" } else { "consistent" };
-        let case = format!("manufactured solution mode 3 {} {matrix} 1/16 m", shape.name());
+        let case = format!("manufactured solution mode 3 {} {} 1/16 m", shape.name(), mass.name());
         let d = Discretisation { cell: 1.0 / 16.0, shape, mass, ..base };
         match mpm_tests::manufactured::manufactured_mode(&d, AMPLITUDE, 3) {
             Ok(m) => rows.at_most(

@@ -70,6 +70,16 @@ pub enum MassMatrix {
     Consistent,
 }
 
+impl MassMatrix {
+    /// the scene file's keyword.
+    pub fn name(self) -> &'static str {
+        match self {
+            MassMatrix::Lumped => "lumped",
+            MassMatrix::Consistent => "consistent",
+        }
+    }
+}
+
 /// When a node on a boundary plane is held by the plane (beyond the paper, which holds every such
 /// node).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]

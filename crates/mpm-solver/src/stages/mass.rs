@@ -126,8 +126,8 @@ pub(crate) struct ConsistentScratch {
     neighbours: Vec<u32>,
     /// The matrix, row by row in the band layout.
     values: Vec<Real>,
-    /// Nodes solved for (module docs: above the small-mass threshold, not held by a frictional
-    /// or frictionless plane).
+    /// Nodes solved for (module docs: above the small-mass threshold, not held by a Coulomb or
+    /// rough plane).
     free: Vec<bool>,
     /// The nodes a re-solve prescribes that were solved for (freed again after it).
     prescribed: Vec<u32>,
@@ -176,16 +176,20 @@ const fn band_place(k: usize, l: usize, w: usize) -> usize {
 }
 
 /// Σ over fixed chunks of `f(chunk range)`, in chunk order: bit-identical for any thread count.
-fn chunked_sum<T>(n: usize, f: impl Fn(std::ops::Range<usize>) -> T + Sync) -> T
-where
-    T: Copy + Default + Send + std::ops::Add<Output = T>,
-{
+fn chunked_sum(n: usize, f: impl Fn(std::ops::Range<usize>) -> Vector + Sync) -> Vector {
     let chunk = chunk_len(n);
-    let parts: Vec<T> = (0..n.div_ceil(chunk))
+    let parts: Vec<Vector> = (0..n.div_ceil(chunk))
         .into_par_iter()
         .map(|c| f(c * chunk..((c + 1) * chunk).min(n)))
         .collect();
-    parts.iter().fold(T::default(), |s, &v| s + v)
+    parts.iter().fold(Vector::ZERO, |s, &v| s + v)
+}
+
+/// (M v)_i for the banded matrix `values` (rows of `band` entries, columns `neighbours`).
+fn row_times(values: &[Real], neighbours: &[u32], band: usize, i: usize, v: &[Vector]) -> Vector {
+    let row = &values[i * band..][..band];
+    let cols = &neighbours[i * band..][..band];
+    row.iter().zip(cols).fold(Vector::ZERO, |s, (&a, &j)| s + a * v[j as usize])
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -229,12 +233,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // A node a Coulomb or rough plane holds this step keeps its lumped row, and so does a
         // ghost's image behind such a plane (module docs: the contact law's impulse is the
         // lumped one).
-        for b in &sc.boundary {
-            let sliding = |p: &NodePlane| p.held && p.wall.boundary().friction() != Friction::Fixed;
-            // (a ghost behind a fixed plane is its image mirrored whatever else holds it)
-            if b.mirror.is_some_and(|m| m.fixed) {
-                continue;
-            }
+        // (a ghost behind a fixed plane is its image mirrored whatever else holds it)
+        let sliding = |p: &NodePlane| p.held && p.wall.boundary().friction() != Friction::Fixed;
+        for b in sc.boundary.iter().filter(|b| !b.mirror.is_some_and(|m| m.fixed)) {
             if sc.node_planes[b.planes()].iter().any(sliding) {
                 cm.free[b.node as usize] = false;
                 if let Some(m) = b.mirror {
@@ -408,9 +409,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             if !free[i] {
                 return mass[i] * a[i] - f[i];
             }
-            let row = &values[i * band..][..band];
-            let cols = &neighbours[i * band..][..band];
-            row.iter().zip(cols).fold(Vector::ZERO, |s, (&m, &j)| s + m * a[j as usize]) - f[i]
+            row_times(values, neighbours, band, i, a) - f[i]
         };
         // (impulse x, impulse y, work) over them, absolute velocities; elsewhere r_i is the
         // solver's residual, left out, so that the momentum balance checks it is negligible.
@@ -428,13 +427,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 continue;
             }
             let r = reaction(i) * dt;
-            let wall = match b.mirror {
-                Some(m) if !m.fixed => {
-                    let j = m.image as usize;
-                    m.wall_velocity(v[j] + a[j] * dt)
-                }
-                _ => Vector::ZERO,
-            };
+            // (as the contact law saw it: the image's v^L is final, prescribed by its ghost)
+            let wall = b.mirror.map_or(Vector::ZERO, |m| {
+                let j = m.image as usize;
+                m.wall_velocity(v[j] + a[j] * dt)
+            });
             work -= r.dot(wall);
             let mean_v = v[i] + 0.5 * dt * a[i] - wall;
             let n = plane.wall.boundary().normal();
@@ -457,11 +454,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let n = x.len();
         let chunk = chunk_len(n);
         let (values, neighbours, free) = (&cm.values[..], &cm.neighbours[..], &cm.free[..]);
-        let multiply = |i: usize, v: &[Vector]| -> Vector {
-            let row = &values[i * band..][..band];
-            let cols = &neighbours[i * band..][..band];
-            row.iter().zip(cols).fold(Vector::ZERO, |s, (&a, &j)| s + a * v[j as usize])
-        };
+        let multiply = |i: usize, v: &[Vector]| row_times(values, neighbours, band, i, v);
         // Tied ghosts (re-solve only): x_g = −x_j in every vector the matrix multiplies, and the
         // image's row gets the ghost's, mirrored (Tᵀ: row j minus row g). Serial: a few nodes.
         let slaves = &cm.slaves[..];
