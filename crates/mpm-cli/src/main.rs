@@ -522,7 +522,7 @@ fn finish(
                 if signals.terminated.load(Ordering::SeqCst) {
                     return ExitCode::from(143);
                 }
-            } else if s.status != RunStatus::Completed && quiet {
+            } else if !matches!(s.status, RunStatus::Completed | RunStatus::AtRest) && quiet {
                 // The status is the answer: say it even when quiet.
                 eprintln!("mpm: {:?}: {}", s.status, s.error.as_deref().unwrap_or(""));
             }

@@ -371,6 +371,7 @@ impl Job for RunJob<'_> {
                     solver.last_report().dt
                 )),
             ),
+            (Ok(RunEnd::Stopped), Some(Stop::AtRest)) => (RunStatus::AtRest, None),
             (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
                 (RunStatus::EnergyAlarm, alarm_message(&driver.history, r.alarm.threshold))
             }
@@ -393,7 +394,7 @@ impl Job for RunJob<'_> {
         }
         // The final row may trip the alarm: a run is judged on its last state too.
         let (status, error) = match status {
-            RunStatus::Completed if driver.history.alarm_time.is_some() => {
+            RunStatus::Completed | RunStatus::AtRest if driver.history.alarm_time.is_some() => {
                 (RunStatus::EnergyAlarm, alarm_message(&driver.history, r.alarm.threshold))
             }
             _ => (status, error),
@@ -524,6 +525,8 @@ enum Stop {
     EnergyAlarm,
     /// `max_steps` was reached.
     StepLimit,
+    /// `stop_at_rest`: the material has come to rest.
+    AtRest,
 }
 
 /// Rows of each series this session has on disk.
@@ -537,6 +540,27 @@ struct Flushed {
 /// A slot time counts as reached when the clock is within this fraction of the interval of it
 /// (round-off of summed steps, never a physical time difference).
 const SLOT_SLACK: f64 = 1e-9;
+
+/// whether the kinetic energy of the series `rows` has stayed at or below `fraction` of its peak
+/// over the last `duration` seconds (rows taken as they were sampled). Read from the rows alone,
+/// so a resumed run decides as the uninterrupted one does. A run that has not moved is not at
+/// rest (its peak is zero): it has not started.
+fn at_rest(rows: &[EnergyRow], fraction: f64, duration: f64) -> bool {
+    let peak = rows.iter().map(|r| r.ledger.kinetic).fold(0.0, f64::max);
+    let Some(last) = rows.last() else { return false };
+    if !(peak > 0.0) {
+        return false;
+    }
+    let limit = fraction * peak;
+    let mut since = last.time;
+    for r in rows.iter().rev() {
+        if r.ledger.kinetic > limit {
+            break;
+        }
+        since = r.time;
+    }
+    last.ledger.kinetic <= limit && last.time - since >= duration
+}
 
 /// index of the last slot k·interval reached at time t.
 fn slot(t: f64, interval: f64) -> u64 {
@@ -590,6 +614,11 @@ impl Driver<'_> {
             dt: solver.last_report().dt,
             ledger,
         });
+        if let Some(rest) = r.stop_at_rest {
+            if at_rest(&self.history.energy, rest.kinetic_fraction, rest.duration) {
+                self.stop.get_or_insert(Stop::AtRest);
+            }
+        }
         let p = solver.particles();
         let direction = r.output.reference.map_or(Vector::X, |rf| rf.direction);
         for (k, &i) in r.output.probes.iter().enumerate() {

@@ -72,7 +72,8 @@ pub fn flush<R>(
 
 /// header line of `energy.csv`.
 pub const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_dissipation,\
-     friction_work,constraint_work,external_work,residual,stored,dissipated,total\n";
+     friction_work,constraint_work,transfer_dissipation,external_work,residual,stored,dissipated,\
+     total\n";
 
 /// header line of `probes.csv`.
 pub const PROBES_HEADER: &str =
@@ -88,7 +89,7 @@ pub fn energy(s: &mut String, rows: &[EnergyRow]) {
         let e = &r.ledger;
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.time,
             r.step,
             r.dt,
@@ -98,6 +99,7 @@ pub fn energy(s: &mut String, rows: &[EnergyRow]) {
             e.plastic_dissipation,
             e.friction_work,
             e.constraint_work,
+            e.transfer_dissipation,
             e.external_work,
             e.residual,
             e.stored(),

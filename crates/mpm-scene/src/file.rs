@@ -422,6 +422,14 @@ pub struct SolverSpec {
     /// velocity transfer: `"flip"` (default, the paper's) or `"apic"` (affine; keeps rotation).
     #[serde(default)]
     pub transfer: Option<Transfer>,
+    /// the PIC share of a FLIP transfer, 0 ≤ β ≤ 1 (`mpm_solver::SolverConfig::pic_fraction`):
+    /// default 0.001 for granular materials (their deposits come to rest), 0 for elastic ones
+    /// and with APIC.
+    #[serde(default)]
+    pub pic_fraction: Option<f64>,
+    /// end the run early, with status `at_rest`, once the material has come to rest.
+    #[serde(default)]
+    pub stop_at_rest: Option<StopAtRestSpec>,
     /// when boundary planes hold their nodes: `"surface"` (default: where material touches them)
     /// or `"node"` (the paper's: always).
     #[serde(default)]
@@ -442,6 +450,20 @@ pub struct SolverSpec {
     /// whose initial Δt needs more, and a run that reaches it stops with status `step_limit`.
     #[serde(default)]
     pub max_steps: Option<i64>,
+}
+
+/// `[solver] stop_at_rest`: the run ends once the kinetic energy has stayed below
+/// `kinetic_fraction` of its peak for `duration` seconds (sampled at every output row).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopAtRestSpec {
+    /// largest kinetic energy, as a fraction of the run's peak, that counts as at rest
+    /// (default 1e-6).
+    #[serde(default)]
+    pub kinetic_fraction: Option<f64>,
+    /// how long (s) the kinetic energy must stay below it (default 1 s).
+    #[serde(default)]
+    pub duration: Option<f64>,
 }
 
 /// A point-data field of the VTK output.

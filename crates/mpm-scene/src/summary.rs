@@ -25,15 +25,18 @@ pub enum RunStatus {
     EnergyAlarm,
     /// the run reached `[solver] max_steps` before its end time.
     StepLimit,
+    /// `[solver] stop_at_rest`: the kinetic energy stayed below its stated fraction of the
+    /// peak for its stated time, and the run ended there, before its end time.
+    AtRest,
 }
 
 impl RunStatus {
-    /// the process exit code `mpm` ends with (README's table): 0 completed, 3 failed,
+    /// the process exit code `mpm` ends with (README's table): 0 completed or at rest, 3 failed,
     /// 4 energy alarm, 5 step limit, 130 interrupted (143 when by SIGTERM, which the front end
     /// knows).
     pub fn exit_code(self) -> u8 {
         match self {
-            RunStatus::Completed => 0,
+            RunStatus::Completed | RunStatus::AtRest => 0,
             RunStatus::Failed => 3,
             RunStatus::EnergyAlarm => 4,
             RunStatus::StepLimit => 5,

@@ -188,6 +188,16 @@ pub struct SolverConfig {
     pub gravity_ramp: Real,
     /// Particle ↔ grid velocity transfer: FLIP (the paper's, default) or APIC.
     pub transfer: Transfer,
+    /// Under FLIP, the share β of the PIC velocity in each particle's new velocity:
+    /// v_p ← (1 − β)(v_p + Δt Σ_i S_ip a_i) + β Σ_i S_ip v_i^L (0: pure FLIP, eq 7; 1: PIC).
+    /// FLIP alone never damps the particle velocities that the grid cannot see (its null
+    /// space): a granular deposit keeps them for ever as kinetic energy that moves nothing, and
+    /// they feed the few grains that touch a boundary alone until one is thrown (measured on the
+    /// flume run to 60 s, `g2p.rs`). The blend removes a share β of that noise per step; what it
+    /// takes is booked in the ledger as transfer dissipation. Scenes of granular materials get a
+    /// non-zero default (mpm-scene); must be 0 with APIC, which damps that noise itself.
+    #[serde(default)]
+    pub pic_fraction: Real,
     /// When boundary planes hold their nodes: where material touches them (default) or always.
     pub contact: Contact,
     /// Lumped (the paper's, default) or consistent mass matrix.
@@ -208,6 +218,7 @@ impl Default for SolverConfig {
             objective_stress: false,
             gravity_ramp: 0.0,
             transfer: Transfer::Flip,
+            pic_fraction: 0.0,
             contact: Contact::Surface,
             mass: MassMatrix::Lumped,
         }
@@ -265,6 +276,20 @@ impl SolverConfig {
                 name: "small_mass_ratio",
                 value: self.small_mass_ratio,
                 expected: "0 ≤ ratio < 1 (fraction of the mean particle mass)",
+            });
+        }
+        if !(0.0..=1.0).contains(&self.pic_fraction) {
+            return Err(SolverError::InvalidSetting {
+                name: "pic_fraction",
+                value: self.pic_fraction,
+                expected: "0 ≤ pic_fraction ≤ 1 (0: FLIP, 1: PIC)",
+            });
+        }
+        if self.pic_fraction > 0.0 && self.transfer == Transfer::Apic {
+            return Err(SolverError::Incompatible {
+                setting: "pic_fraction",
+                with: "transfer",
+                reason: "APIC damps grid-invisible noise itself: the PIC blend applies to FLIP",
             });
         }
         if self.mass == MassMatrix::Consistent {

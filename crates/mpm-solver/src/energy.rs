@@ -2,7 +2,8 @@
 //!
 //! Stored: kinetic Σ ½ m_p |v_p|², elastic strain Σ V_p ½ σ_p : C⁻¹ : σ_p, and gravitational potential
 //! Σ −m_p g·x_p (zero at the origin). Dissipated (accumulated over the run): plastic work
-//! Σ V_p σ_p : Δεᵖ_p, friction work and normal-constraint work at boundary nodes. External work is the
+//! Σ V_p σ_p : Δεᵖ_p, friction work and normal-constraint work at boundary nodes, and the kinetic
+//! energy the PIC share of a blended transfer removed (`SolverConfig::pic_fraction`). External work is the
 //! energy put in by loads that change in time: while gravity is ramped up, the potential
 //! −m g(t)·x changes with g at fixed x, and that change Σ −m_p Δg·x_p is booked as external work.
 //!
@@ -28,6 +29,10 @@ pub struct EnergyLedger {
     pub friction_work: Real,
     /// Kinetic energy removed by normal boundary constraints since the start.
     pub constraint_work: Real,
+    /// Kinetic energy removed by the PIC share of the velocity transfer since the start
+    /// ([`crate::SolverConfig::pic_fraction`]; 0 under pure FLIP).
+    #[serde(default)]
+    pub transfer_dissipation: Real,
     /// Work of non-conservative external loads since the start.
     pub external_work: Real,
     /// (stored + dissipated) − (initial stored + external work).
@@ -40,9 +45,12 @@ impl EnergyLedger {
         self.kinetic + self.strain + self.potential
     }
 
-    /// plastic + friction + constraint work.
+    /// plastic + friction + constraint work + transfer dissipation.
     pub fn dissipated(&self) -> Real {
-        self.plastic_dissipation + self.friction_work + self.constraint_work
+        self.plastic_dissipation
+            + self.friction_work
+            + self.constraint_work
+            + self.transfer_dissipation
     }
 
     /// stored + dissipated: constant for a perfect integrator without external work.
@@ -62,6 +70,9 @@ pub struct Dissipation {
     pub constraint: Real,
     /// External work of time-varying loads over all steps (not a dissipation: an input).
     pub external: Real,
+    /// Kinetic energy the PIC share of the transfer removed over all steps.
+    #[serde(default)]
+    pub transfer: Real,
     /// Impulse the boundaries gave the material over all steps (N·s per m of thickness): with
     /// gravity's, it is the change of the material's momentum (a check of conservation).
     #[serde(default)]

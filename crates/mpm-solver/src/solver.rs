@@ -480,7 +480,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let d = checkpoint.dissipation;
         // A NaN initial energy means "not computed yet" (a new run); dissipation must be finite.
-        if let Some(bad) = [d.plastic, d.friction, d.constraint, d.external]
+        if let Some(bad) = [d.plastic, d.friction, d.constraint, d.external, d.transfer]
             .into_iter()
             .find(|e| !e.is_finite())
             .or(Some(checkpoint.initial_stored).filter(|e| e.is_infinite()))
@@ -696,6 +696,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             plastic_dissipation: self.dissipation.plastic,
             friction_work: self.dissipation.friction,
             constraint_work: self.dissipation.constraint,
+            transfer_dissipation: self.dissipation.transfer,
             external_work: self.dissipation.external,
             residual: 0.0,
         };

@@ -59,6 +59,7 @@ impl SceneMaterial for DruckerPrager {
     const KIND: &'static str = "drucker_prager";
     const TITLE: &'static str = "Drucker-Prager";
     const OBJECTIVE_STRESS: bool = true;
+    const PIC_FRACTION: f64 = crate::GRANULAR_PIC_FRACTION;
     type Spec = DruckerPragerSpec;
 
     fn build(s: DruckerPragerSpec, _density: f64) -> Result<Self, ConstitutiveError> {

@@ -20,6 +20,7 @@ impl SceneMaterial for LinearElastic {
     const KIND: &'static str = "elastic";
     const TITLE: &'static str = "elastic";
     const OBJECTIVE_STRESS: bool = false;
+    const PIC_FRACTION: f64 = 0.0;
     type Spec = ElasticSpec;
 
     fn build(spec: ElasticSpec, _density: f64) -> Result<Self, ConstitutiveError> {

@@ -49,6 +49,9 @@ pub trait SceneMaterial: SceneModel {
     /// whether `[solver] objective_stress` defaults to on for this model (models meant for
     /// large deformation: the Jaumann rate keeps stress objective under rotation).
     const OBJECTIVE_STRESS: bool;
+    /// the default `[solver] pic_fraction` of its scenes: non-zero for granular models, whose
+    /// deposits must come to rest (`mpm_solver::SolverConfig::pic_fraction`).
+    const PIC_FRACTION: f64;
     /// the table's parameters besides `kind` and `density`.
     type Spec: DeserializeOwned;
     /// builds the model from its parameters and the material's density (kg/m³); a refused
@@ -187,6 +190,13 @@ macro_rules! registry {
             pub fn kind(&self) -> &'static str {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::KIND, )*
+                }
+            }
+
+            /// the default `[solver] pic_fraction`.
+            pub fn pic_fraction(&self) -> f64 {
+                match self {
+                    $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::PIC_FRACTION, )*
                 }
             }
 

@@ -11,6 +11,7 @@ impl SceneMaterial for MuI {
     const KIND: &'static str = "mu_i";
     const TITLE: &'static str = "μ(I)";
     const OBJECTIVE_STRESS: bool = true;
+    const PIC_FRACTION: f64 = crate::GRANULAR_PIC_FRACTION;
     type Spec = MuIParams;
 
     fn build(s: MuIParams, density: f64) -> Result<Self, ConstitutiveError> {

@@ -288,8 +288,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let boundaries = boundaries::build(ctx, f)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
     let walls = boundaries::walls(ctx, f, &grid, &seeds)?;
-    let objective = materials.objective_stress();
-    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, objective)?;
+    let config = solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, &materials)?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;
@@ -323,6 +322,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         initial_dt,
         alarm: settings.alarm,
         max_steps: settings.max_steps,
+        stop_at_rest: settings.stop_at_rest,
         initial_state,
     })
 }

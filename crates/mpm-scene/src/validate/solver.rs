@@ -11,6 +11,7 @@ use crate::file::SolverSpec;
 use crate::presets::{self, PresetSettings};
 use crate::scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GridBuilt, MaterialsBuilt, Seed,
+    StopAtRest,
 };
 
 /// The `[solver]` settings, checked, with the preset's and the defaults filled in.
@@ -23,6 +24,7 @@ pub(super) struct Settings {
     pub small_mass_ratio: f64,
     pub alarm: EnergyAlarm,
     pub max_steps: u64,
+    pub stop_at_rest: Option<StopAtRest>,
 }
 
 /// Checks `[solver]` except what needs the grid, materials and bodies (the first Δt).
@@ -123,6 +125,32 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
         ));
     }
     let max_steps = max_steps as u64;
+    let stop_at_rest = match s.stop_at_rest {
+        None => None,
+        Some(spec) => {
+            let rest = StopAtRest {
+                kinetic_fraction: spec.kinetic_fraction.unwrap_or(1e-6),
+                duration: spec.duration.unwrap_or(1.0),
+            };
+            if !(rest.kinetic_fraction > 0.0 && rest.kinetic_fraction < 1.0) {
+                return Err(ctx.range(
+                    "solver.stop_at_rest.kinetic_fraction",
+                    rest.kinetic_fraction,
+                    "0 < kinetic_fraction < 1 (of the run's peak kinetic energy)",
+                    "remove it to use the default 1e-6",
+                ));
+            }
+            if !(finite_pos(rest.duration)) {
+                return Err(ctx.range(
+                    "solver.stop_at_rest.duration",
+                    rest.duration,
+                    "0 < duration < ∞ (s)",
+                    "remove it to use the default 1 s, or give e.g. `duration = 0.5`",
+                ));
+            }
+            Some(rest)
+        }
+    };
     Ok(Settings {
         preset,
         scheme,
@@ -132,11 +160,12 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
         small_mass_ratio,
         alarm,
         max_steps,
+        stop_at_rest,
     })
 }
 
-/// The solver configuration of a scene (`objective_default`: whether its model wants the
-/// objective stress rate unless the scene says otherwise).
+/// The solver configuration of a scene; where the scene is silent, its materials' model decides
+/// whether the stress rate is objective and the PIC share of a FLIP transfer.
 pub(super) fn config(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
@@ -144,8 +173,11 @@ pub(super) fn config(
     boundaries: Boundaries,
     periodic: Option<Periodic>,
     walls: Vec<Wall>,
-    objective_default: bool,
+    materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
+    let transfer = s.transfer.unwrap_or_default();
+    let pic_default =
+        if transfer == mpm_solver::Transfer::Flip { materials.pic_fraction() } else { 0.0 };
     let config = SolverConfig {
         scheme: settings.scheme,
         time_step: settings.time_step,
@@ -154,9 +186,10 @@ pub(super) fn config(
         periodic,
         walls,
         small_mass_ratio: settings.small_mass_ratio,
-        objective_stress: s.objective_stress.unwrap_or(objective_default),
+        objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
         gravity_ramp: settings.gravity_ramp,
-        transfer: s.transfer.unwrap_or_default(),
+        transfer,
+        pic_fraction: s.pic_fraction.unwrap_or(pic_default),
         contact: s.contact.unwrap_or_default(),
         mass: s.mass.unwrap_or_default(),
     };
