@@ -10,6 +10,7 @@
 //! - `extremes`: scenes at the edges of the admissible settings, each with its expected outcome
 //!   (completes within the energy bound, or stops with a named error); `target/extremes/`.
 
+mod column;
 mod dem;
 mod extremes;
 mod flume;

@@ -477,6 +477,10 @@ pub fn run(quick: bool) -> Result<bool> {
         1,
     ));
 
+    // Granular flows come to rest (issue 37): the flume run past its stop, column collapses.
+    crate::flume::rest_rows(&mut rows.table, &dir.join("flume_60s"));
+    crate::column::verify_rows(&mut rows.table, &dir, quick)?;
+
     // The flume (§7): no exact answer.
     if !quick {
         crate::flume::verify_rows(&mut rows.table, &mut notes);

@@ -548,7 +548,7 @@ const SLOT_SLACK: f64 = 1e-9;
 fn at_rest(rows: &[EnergyRow], fraction: f64, duration: f64) -> bool {
     let peak = rows.iter().map(|r| r.ledger.kinetic).fold(0.0, f64::max);
     let Some(last) = rows.last() else { return false };
-    if !(peak > 0.0) {
+    if peak.is_nan() || peak <= 0.0 {
         return false;
     }
     let limit = fraction * peak;

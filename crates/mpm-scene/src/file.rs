@@ -427,6 +427,11 @@ pub struct SolverSpec {
     /// and with APIC.
     #[serde(default)]
     pub pic_fraction: Option<f64>,
+    /// below this fraction of its material's reference density a particle is a separated grain
+    /// and carries no stress (`mpm_solver::SolverConfig::separation_density`): default 0.5 for
+    /// Drucker-Prager, 0 (off) for elastic materials, μ(I) (its own opening) and APIC.
+    #[serde(default)]
+    pub separation_density: Option<f64>,
     /// end the run early, with status `at_rest`, once the material has come to rest.
     #[serde(default)]
     pub stop_at_rest: Option<StopAtRestSpec>,

@@ -50,8 +50,9 @@ mod validate;
 pub use dispatch::{Job, SavedState, SceneModel, dispatch};
 pub use error::SceneError;
 pub use scene::{
-    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION, GridBuilt, InitialState, MaterialsBuilt,
-    Reference, Resolved, ResolvedOutput, Scene, Seed, StopAtRest, fnv1a, ground_height, segment_at,
+    DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION,
+    GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
+    ResolvedOutput, Scene, Seed, StopAtRest, fnv1a, ground_height, segment_at,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{

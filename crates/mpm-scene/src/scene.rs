@@ -169,6 +169,11 @@ pub const DEFAULT_ENERGY_ALARM: f64 = 0.2;
 /// on 0.02 m cells; this one removes 7–37 % there, less on finer grids.
 pub const GRANULAR_PIC_FRACTION: f64 = 0.001;
 
+/// Default `[solver] separation_density` of Drucker-Prager scenes (μ(I) tracks its own opening):
+/// a particle below half its material's reference density is a separated grain and carries no
+/// stress (`mpm_solver::SolverConfig::separation_density` says why half).
+pub const GRANULAR_SEPARATION_DENSITY: f64 = 0.5;
+
 /// Default `[solver] max_steps`.
 pub const DEFAULT_MAX_STEPS: u64 = 100_000_000;
 

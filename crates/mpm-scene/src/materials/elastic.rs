@@ -21,6 +21,7 @@ impl SceneMaterial for LinearElastic {
     const TITLE: &'static str = "elastic";
     const OBJECTIVE_STRESS: bool = false;
     const PIC_FRACTION: f64 = 0.0;
+    const SEPARATION_DENSITY: f64 = 0.0;
     type Spec = ElasticSpec;
 
     fn build(spec: ElasticSpec, _density: f64) -> Result<Self, ConstitutiveError> {

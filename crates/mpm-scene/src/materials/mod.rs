@@ -52,6 +52,10 @@ pub trait SceneMaterial: SceneModel {
     /// the default `[solver] pic_fraction` of its scenes: non-zero for granular models, whose
     /// deposits must come to rest (`mpm_solver::SolverConfig::pic_fraction`).
     const PIC_FRACTION: f64;
+    /// the default `[solver] separation_density` of its scenes: non-zero for granular models,
+    /// which carry no stress once their grains have separated
+    /// (`mpm_solver::SolverConfig::separation_density`).
+    const SEPARATION_DENSITY: f64;
     /// the table's parameters besides `kind` and `density`.
     type Spec: DeserializeOwned;
     /// builds the model from its parameters and the material's density (kg/m³); a refused
@@ -190,6 +194,13 @@ macro_rules! registry {
             pub fn kind(&self) -> &'static str {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::KIND, )*
+                }
+            }
+
+            /// the default `[solver] separation_density`.
+            pub fn separation_density(&self) -> f64 {
+                match self {
+                    $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::SEPARATION_DENSITY, )*
                 }
             }
 

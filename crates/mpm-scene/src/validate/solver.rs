@@ -176,8 +176,12 @@ pub(super) fn config(
     materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
     let transfer = s.transfer.unwrap_or_default();
-    let pic_default =
-        if transfer == mpm_solver::Transfer::Flip { materials.pic_fraction() } else { 0.0 };
+    // Under APIC neither default applies: APIC damps the grid-invisible noise itself, and a
+    // stress-free grain keeps its affine stretching for ever, so separated grains would expand
+    // without bound (a = 1 column collapse: thrown to 1.5 × the column's height, measured).
+    let flip = transfer == mpm_solver::Transfer::Flip;
+    let pic_default = if flip { materials.pic_fraction() } else { 0.0 };
+    let separation_default = if flip { materials.separation_density() } else { 0.0 };
     let config = SolverConfig {
         scheme: settings.scheme,
         time_step: settings.time_step,
@@ -190,6 +194,7 @@ pub(super) fn config(
         gravity_ramp: settings.gravity_ramp,
         transfer,
         pic_fraction: s.pic_fraction.unwrap_or(pic_default),
+        separation_density: s.separation_density.unwrap_or(separation_default),
         contact: s.contact.unwrap_or_default(),
         mass: s.mass.unwrap_or_default(),
     };

@@ -70,7 +70,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let v_new = if beta > 0.0 {
                         // Σ_i S_ip v_i^L = dx is the PIC velocity.
                         let blended = flip + beta * (dx - flip);
-                        removed += 0.5 * mass[p] * (flip.length_squared() - blended.length_squared());
+                        removed +=
+                            0.5 * mass[p] * (flip.length_squared() - blended.length_squared());
                         blended
                     } else {
                         flip
@@ -173,4 +174,71 @@ fn check_finite(
     }
     let field = if x_new.is_finite() { Field::Velocity } else { Field::Position };
     Err(SolverError::NonFinite { step, particle: q, position: x, field })
+}
+
+#[cfg(test)]
+mod tests {
+    use mpm_constitutive::LinearElastic;
+    use mpm_grid::{Bilinear, RegularGrid};
+
+    use crate::particles::{NewParticle, Particles};
+    use crate::solver::Solver;
+    use crate::{SolverConfig, Vector};
+
+    /// Two particles at one point with opposite velocities: every node sees exactly zero
+    /// momentum, so the whole motion lies in FLIP's null space (the grid has nothing to move or
+    /// strain). Returns (initial kinetic energy, kinetic energy, transfer dissipation, residual)
+    /// after `steps` steps with PIC share `beta`.
+    fn null_mode(beta: f64, steps: usize) -> (f64, f64, f64, f64) {
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.5), [8, 8]).unwrap();
+        let mut particles = Particles::default();
+        for v in [Vector::new(0.3, -0.2), Vector::new(-0.3, 0.2)] {
+            let x = Vector::new(2.1, 1.7);
+            particles.push(NewParticle::unstressed(x, v, 0.0625, 1000.0, ()));
+        }
+        let config =
+            SolverConfig { gravity: Vector::ZERO, pic_fraction: beta, ..Default::default() };
+        let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+        let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+        let e0 = s.energy();
+        for _ in 0..steps {
+            s.step().unwrap();
+        }
+        let e = s.energy();
+        (e0.kinetic, e.kinetic, e.transfer_dissipation, e.residual)
+    }
+
+    /// Pure FLIP keeps the null-space motion for ever; a PIC share β takes (1 − β)² of its
+    /// kinetic energy away per step, exactly (the grid's velocity is exactly zero), and the
+    /// ledger books what left as transfer dissipation, so the residual stays at rounding.
+    #[test]
+    fn the_pic_share_damps_the_null_space_and_books_what_it_takes() {
+        let (ke0, ke, transfer, residual) = null_mode(0.0, 50);
+        assert_eq!(ke, ke0, "pure FLIP must keep the grid-invisible motion unchanged");
+        assert_eq!(transfer, 0.0);
+        assert!(residual.abs() <= 1e-15 * ke0, "residual {residual}");
+
+        let (beta, steps) = (0.01, 50);
+        let (ke0, ke, transfer, residual) = null_mode(beta, steps);
+        let expected = ke0 * (1.0 - beta).powi(2 * steps as i32);
+        // 50 products of rounded factors: a few ulps each.
+        assert!((ke - expected).abs() <= 1e-13 * ke0, "kinetic {ke} against {expected}");
+        assert!((transfer - (ke0 - ke)).abs() <= 1e-13 * ke0, "booked {transfer}");
+        assert!(residual.abs() <= 1e-13 * ke0, "residual {residual}");
+    }
+
+    /// The PIC share is a setting with a range: outside [0, 1], and with APIC, it is refused.
+    #[test]
+    fn the_pic_share_is_checked() {
+        let bad = |c: SolverConfig| c.validate().is_err();
+        assert!(bad(SolverConfig { pic_fraction: -0.1, ..Default::default() }));
+        assert!(bad(SolverConfig { pic_fraction: 1.5, ..Default::default() }));
+        assert!(bad(SolverConfig { pic_fraction: f64::NAN, ..Default::default() }));
+        assert!(bad(SolverConfig {
+            pic_fraction: 0.01,
+            transfer: crate::Transfer::Apic,
+            ..Default::default()
+        }));
+        assert!(!bad(SolverConfig { pic_fraction: 1.0, ..Default::default() }));
+    }
 }
