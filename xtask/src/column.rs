@@ -127,10 +127,11 @@ fn scene_text(c: &Collapse) -> String {
     let nx = (width / dx).ceil() as u32;
     let ny = ((1.5 * h0 + 2.0 * dx) / dx).ceil() as u32;
     // The collapse lasts a few free-fall times of the column, √(2 H0 / g) (0.2 s at a = 1),
-    // but the last grains of the thin front settle for seconds after (a = 1, rough, 0.02 m:
-    // kinetic energy 2e-5 of its peak from 0.8 to 4 s, 5e-7 from 4.8 s on); `stop_at_rest`
-    // ends most runs long before this.
-    let end_time = (15.0 * (2.0 * h0 / 9.81).sqrt()).max(6.0);
+    // but the loose grains of the thin toe settle for seconds after: on the Coulomb floor at
+    // L0/Δx = 10 the kinetic energy decays from 2e-5 of its peak at 1.3 s to 1e-6 at 11 s
+    // (a = 1) and 12.5 s (a = 0.5), an e-folding time of ~7 s. `stop_at_rest` ends most runs
+    // long before this.
+    let end_time = (15.0 * (2.0 * h0 / 9.81).sqrt()).max(16.0);
     format!(
         "title = \"column collapse a = {a}\"\n\
          [grid]\nkind = \"regular\"\norigin = [0.0, 0.0]\ncell = [{dx}, {dx}]\ncells = [{nx}, {ny}]\n\
