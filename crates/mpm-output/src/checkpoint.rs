@@ -33,8 +33,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// header with length and checksum, the history the energy check; 4: particle stresses carry
 /// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
 /// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse; 7: the history
-/// carries the hazard envelopes).
-pub const FORMAT: u32 = 7;
+/// carries the hazard envelopes; 8: the dissipation and the energy rows carry the transfer
+/// dissipation, the solver settings the PIC share and the separation density).
+pub const FORMAT: u32 = 8;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

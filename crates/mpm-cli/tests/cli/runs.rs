@@ -263,7 +263,8 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
     let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
     assert!(matches!(err, RunError::Output(OutputError::Checkpoint { .. })), "{err}");
-    assert!(err.to_string().contains("format 1 but this mpm reads format 7"), "{err}");
+    let expected = format!("format 1 but this mpm reads format {}", mpm_output::checkpoint::FORMAT);
+    assert!(err.to_string().contains(&expected), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
