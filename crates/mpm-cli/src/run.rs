@@ -309,7 +309,11 @@ impl Job for RunJob<'_> {
             stop_after: self.opts.stop_after,
             io_error: None,
             stop: None,
+            rest: RestWatch::default(),
         };
+        if let Some(rest) = r.stop_at_rest {
+            driver.rest = RestWatch::over(&driver.history.energy, rest.kinetic_fraction);
+        }
         if fresh {
             if r.output.envelope {
                 let column = r.grid.column_width();
@@ -442,6 +446,45 @@ struct Driver<'a> {
     io_error: Option<RunError>,
     /// why the driver stopped the run, when not on request.
     stop: Option<Stop>,
+    /// the kinetic energy's course for `stop_at_rest`, kept as the rows come.
+    rest: RestWatch,
+}
+
+/// The peak of the kinetic energy over the series rows so far, and the time of the first row of
+/// the trailing run of rows at or below `fraction` of it (`None` when the last row is above).
+/// Updated row by row; rebuilt from the rows on resume, so a resumed run decides as the
+/// uninterrupted one does.
+#[derive(Clone, Copy, Debug, Default)]
+struct RestWatch {
+    peak: f64,
+    since: Option<f64>,
+}
+
+impl RestWatch {
+    /// the watch after the rows of a history.
+    fn over(rows: &[EnergyRow], fraction: f64) -> Self {
+        let mut w = Self::default();
+        for r in rows {
+            w.push(r.time, r.ledger.kinetic, fraction);
+        }
+        w
+    }
+
+    /// takes one row. A rise to a new peak ends any rest; a run that has not moved (zero
+    /// peak) is not at rest: it has not started.
+    fn push(&mut self, time: f64, kinetic: f64, fraction: f64) {
+        self.peak = self.peak.max(kinetic);
+        if self.peak > 0.0 && kinetic <= fraction * self.peak {
+            self.since.get_or_insert(time);
+        } else {
+            self.since = None;
+        }
+    }
+
+    /// whether the kinetic energy has stayed at or below the fraction for `duration` up to `now`.
+    fn at_rest(&self, now: f64, duration: f64) -> bool {
+        self.since.is_some_and(|t| now - t >= duration)
+    }
 }
 
 /// finds a new run's initial stresses as the scene asks (`[initial_state]`), timed and reported
@@ -541,27 +584,6 @@ struct Flushed {
 /// (round-off of summed steps, never a physical time difference).
 const SLOT_SLACK: f64 = 1e-9;
 
-/// whether the kinetic energy of the series `rows` has stayed at or below `fraction` of its peak
-/// over the last `duration` seconds (rows taken as they were sampled). Read from the rows alone,
-/// so a resumed run decides as the uninterrupted one does. A run that has not moved is not at
-/// rest (its peak is zero): it has not started.
-fn at_rest(rows: &[EnergyRow], fraction: f64, duration: f64) -> bool {
-    let peak = rows.iter().map(|r| r.ledger.kinetic).fold(0.0, f64::max);
-    let Some(last) = rows.last() else { return false };
-    if peak.is_nan() || peak <= 0.0 {
-        return false;
-    }
-    let limit = fraction * peak;
-    let mut since = last.time;
-    for r in rows.iter().rev() {
-        if r.ledger.kinetic > limit {
-            break;
-        }
-        since = r.time;
-    }
-    last.ledger.kinetic <= limit && last.time - since >= duration
-}
-
 /// index of the last slot k·interval reached at time t.
 fn slot(t: f64, interval: f64) -> u64 {
     (t / interval + SLOT_SLACK).floor().max(0.0) as u64
@@ -615,7 +637,8 @@ impl Driver<'_> {
             ledger,
         });
         if let Some(rest) = r.stop_at_rest {
-            if at_rest(&self.history.energy, rest.kinetic_fraction, rest.duration) {
+            self.rest.push(t, ledger.kinetic, rest.kinetic_fraction);
+            if self.rest.at_rest(t, rest.duration) {
                 self.stop.get_or_insert(Stop::AtRest);
             }
         }
@@ -879,7 +902,7 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         }
         self.progress.update(t, report.step);
         if report.step >= r.max_steps && t < r.end_time * (1.0 - 1e-12) {
-            self.stop = Some(Stop::StepLimit);
+            self.stop.get_or_insert(Stop::StepLimit);
         }
         let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
         if interrupted {

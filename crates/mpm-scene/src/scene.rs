@@ -162,9 +162,9 @@ pub const DEFAULT_ENERGY_ALARM: f64 = 0.2;
 
 /// Default `[solver] pic_fraction` of scenes of granular materials (Drucker-Prager, μ(I));
 /// elastic scenes keep the paper's pure FLIP. The smallest share measured to bring every deposit
-/// to rest: with it the flume run to 60 s keeps below 1e-7 of its peak kinetic energy after 3 s
-/// (pure FLIP: 6 J/m, 0.4 % of the peak, for ever, and a grain thrown out at 22.65 s), and the
-/// column collapses of `cargo xtask verify` complete. Ten times more (0.01) shortens a = 0.5 to
+/// to rest: with it (and the separation rule) the flume run to 60 s keeps at most 3.5e-7 of its
+/// peak kinetic energy after 5 s (pure FLIP: 6 J/m, 0.4 % of the peak, for ever, and a grain
+/// thrown out at 22.65 s), and the column collapses of `cargo xtask verify --quick` come to rest. Ten times more (0.01) shortens a = 0.5 to
 /// 2 collapses by a third and removes up to 96 % of the dissipated energy through the transfer
 /// on 0.02 m cells; this one removes 7–37 % there, less on finer grids.
 pub const GRANULAR_PIC_FRACTION: f64 = 0.001;

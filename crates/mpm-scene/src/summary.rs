@@ -20,8 +20,9 @@ pub enum RunStatus {
     /// the solver stopped with an instability (see `error`).
     Failed,
     /// the energy residual exceeded `[solver] energy_alarm` of the run's energy scale (see
-    /// `energy_check`): the run went on to its end time, or stopped there with
-    /// `energy_alarm_stop = true`. Its results are suspect.
+    /// `energy_check`): the run went on to its end time (or came to rest, with
+    /// `stop_at_rest`), or stopped there with `energy_alarm_stop = true`. Its results are
+    /// suspect.
     EnergyAlarm,
     /// the run reached `[solver] max_steps` before its end time.
     StepLimit,

@@ -513,7 +513,10 @@ fn stop_at_rest_ends_the_flume_once_its_deposit_rests() {
         .collect();
     let peak = rows.iter().map(|r| r.1).fold(0.0, f64::max);
     let end = rows.last().unwrap().0;
-    assert!(rows.iter().filter(|r| r.0 >= end - duration).all(|r| r.1 <= fraction * peak));
-    // and not a row earlier than it had to: just before that window it still moved
-    assert!(rows.iter().any(|r| r.0 < end - duration && r.1 > fraction * peak));
+    // the trailing rows at or below the fraction, and the row before them, still moving
+    let first_still = rows.iter().rposition(|r| r.1 > fraction * peak).unwrap() + 1;
+    let since = rows[first_still].0;
+    // it stopped once they spanned the duration, not a series row (0.1 s here) later
+    assert!(end - since >= duration - 1e-9, "stopped after {} s at rest", end - since);
+    assert!(end - since < duration + 0.1 - 1e-9, "stopped {} s after coming to rest", end - since);
 }

@@ -52,8 +52,8 @@ pub trait SceneMaterial: SceneModel {
     /// the default `[solver] pic_fraction` of its scenes: non-zero for granular models, whose
     /// deposits must come to rest (`mpm_solver::SolverConfig::pic_fraction`).
     const PIC_FRACTION: f64;
-    /// the default `[solver] separation_density` of its scenes: non-zero for granular models,
-    /// which carry no stress once their grains have separated
+    /// the default `[solver] separation_density` of its scenes: non-zero for a granular model
+    /// that does not track separation itself (Drucker-Prager; μ(I) has its own opening)
     /// (`mpm_solver::SolverConfig::separation_density`).
     const SEPARATION_DENSITY: f64;
     /// the table's parameters besides `kind` and `density`.

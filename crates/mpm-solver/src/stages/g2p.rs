@@ -94,8 +94,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// the PIC normal correction at nodes held by a plane (module docs), gathered from the
     /// start-of-step particle velocities before any is changed, then applied. Like the difference
-    /// between FLIP and PIC anywhere, the kinetic energy it takes is a transfer dissipation with no
-    /// grid counterpart: the ledger shows it in the residual, not as constraint work. Serial: it
+    /// between FLIP and PIC anywhere, the kinetic energy it takes has no grid counterpart: the
+    /// ledger shows it in the residual, not as constraint work, nor in the transfer dissipation,
+    /// which books only the PIC share of [`crate::SolverConfig::pic_fraction`]. Serial: it
     /// visits only the particles of held boundary nodes.
     pub(crate) fn correct_held_normals(&mut self) {
         let sc = &mut self.scratch;
