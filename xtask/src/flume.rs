@@ -193,20 +193,8 @@ const REST_CLOSURE: f64 = 0.02;
 pub fn rest_rows(table: &mut Table, dir: &std::path::Path) {
     let case = "flume (§7), embedded scene, run to 60 s";
     let mut push = |q: &str, reference: String, computed: String, tol: String, ok: bool| {
-        let status = if ok { Status::Pass } else { Status::Fail };
-        table.push(
-            vec![
-                case.into(),
-                q.into(),
-                reference,
-                "issue 37".into(),
-                computed,
-                "–".into(),
-                tol,
-                status.word().into(),
-            ],
-            status,
-        );
+        let source = "issue 37".to_string();
+        table.bound([case.into(), q.into(), reference, source, computed, tol], ok);
     };
     let outcome = scene()
         .and_then(|base| {

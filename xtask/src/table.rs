@@ -45,6 +45,18 @@ impl Table {
     }
 
     /// number of failed rows.
+    /// a pass/fail row of the verification table against a bound stated in words: case,
+    /// quantity, reference, its source, computed value, an error column left empty, tolerance.
+    pub fn bound(
+        &mut self,
+        [case, quantity, reference, source, computed, tol]: [String; 6],
+        ok: bool,
+    ) {
+        let status = if ok { Status::Pass } else { Status::Fail };
+        let cells = vec![case, quantity, reference, source, computed, "–".into(), tol];
+        self.push(cells.into_iter().chain([status.word().to_string()]).collect(), status);
+    }
+
     pub fn failures(&self) -> usize {
         self.rows.iter().filter(|(_, s)| *s == Status::Fail).count()
     }

@@ -204,9 +204,8 @@ pub struct SolverConfig {
     /// stress) until it is back above the threshold, where it takes up load from zero (the
     /// disconnected state of Dunatunga & Kamrin 2015). 0 turns this off (elastic solids, the
     /// paper's cases). Drucker-Prager scenes get 0.5 by default (mpm-scene; μ(I) tracks its
-    /// own opening and keeps 0): a sand
-    /// packed at a solid fraction of 0.6, at half its density, is a cloud of grains at 0.3, far
-    /// below any contact network. Without it, a lone grain resting on a boundary is squeezed by
+    /// own opening and keeps 0): a sand packed at a solid fraction of 0.6, at half its density,
+    /// is a cloud of grains at 0.3, far below any contact network. Without it, a lone grain resting on a boundary is squeezed by
     /// each step's contact and its elastic stress ratchets up (−122 kPa at 18 % of its density,
     /// measured on the flume) until it is thrown.
     #[serde(default)]
