@@ -20,7 +20,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use mpm_cli::{RunOptions, RunStatus, run_scene};
+use mpm_run::{RunOptions, RunStatus, run_scene};
 use mpm_scene::load_scene_str;
 
 use crate::table::{Status, Table, num, pct};
@@ -156,12 +156,8 @@ pub fn run(c: &Collapse, dir: &Path) -> Result<Outcome, String> {
     let text = scene_text(c);
     let scene = load_scene_str(&text, &c.label).map_err(|e| e.to_string())?;
     let initial_dt = scene.resolved().initial_dt;
-    let options = RunOptions {
-        out_dir: Some(dir.to_path_buf()),
-        quiet: true,
-        force: true,
-        ..Default::default()
-    };
+    let options =
+        RunOptions { out_dir: Some(dir.to_path_buf()), force: true, ..Default::default() };
     let s = run_scene(&scene, &options).map_err(|e| e.to_string())?;
     let (_, upper) = experimental_runout(c.a);
     let h0 = c.a * L0;

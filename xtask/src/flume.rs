@@ -1,4 +1,4 @@
-//! The dry sand flume of the paper's §7, run through the CLI's embedded scene (`mpm-cli`).
+//! The dry sand flume of the paper's §7, run through the CLI's embedded scene (`mpm-run`).
 //!
 //! There is no exact answer: `verify` reports the front position and the total runout and checks
 //! only that the run completes with every value finite and that the energy ledger closes;
@@ -8,7 +8,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use mpm_cli::{RunOptions, RunStatus, RunSummary, run_scene};
+use mpm_run::{RunOptions, RunStatus, RunSummary, run_scene};
 use mpm_scene::file::ShapeFunctionKind;
 use mpm_scene::{Scene, embedded_scene, load_scene_str};
 use mpm_solver::Scheme;
@@ -27,7 +27,7 @@ const GRID_HEIGHT: f64 = 1.5;
 
 /// the embedded flume scene.
 fn scene() -> Result<Scene, String> {
-    let text = embedded_scene("flume").ok_or("mpm-cli has no embedded `flume` scene")?;
+    let text = embedded_scene("flume").ok_or("mpm-scene has no embedded `flume` scene")?;
     load_scene_str(text, "embedded:flume").map_err(|e| e.to_string())
 }
 
@@ -50,8 +50,7 @@ fn run(base: &Scene, d: &Discretisation) -> Result<RunSummary, String> {
             f.solver.dt = None;
         })
         .map_err(|e| e.to_string())?;
-    let summary = run_scene(&s, &RunOptions { quiet: true, ..Default::default() })
-        .map_err(|e| e.to_string())?;
+    let summary = run_scene(&s, &RunOptions::default()).map_err(|e| e.to_string())?;
     if summary.status != RunStatus::Completed {
         return Err(summary.error.clone().unwrap_or_else(|| format!("{:?}", summary.status)));
     }
@@ -208,12 +207,8 @@ pub fn rest_rows(table: &mut Table, dir: &std::path::Path) {
             .map_err(|e| e.to_string())
         })
         .and_then(|s| {
-            let options = RunOptions {
-                out_dir: Some(dir.to_path_buf()),
-                quiet: true,
-                force: true,
-                ..Default::default()
-            };
+            let options =
+                RunOptions { out_dir: Some(dir.to_path_buf()), force: true, ..Default::default() };
             run_scene(&s, &options).map_err(|e| e.to_string())
         })
         .and_then(|summary| {

@@ -1,6 +1,6 @@
 //! `cargo xtask`: the workspace's numerical checks, run in release mode.
 //!
-//! - `verify [--quick]`: every verification case of SPEC §6 against its reference, one table,
+//! - `verify [--quick]`: every verification case of the paper (and beyond it) against its reference, one table,
 //!   `target/verify/report.md` and PNG plots; exits non-zero if any row fails.
 //! - `study [--quick]`: the speed/accuracy trade (cell size, particles per cell, scheme, shape
 //!   functions, Courant number) on the sliding blocks, the vibrating bar and the flume; CSV,
@@ -28,7 +28,7 @@ const USAGE: &str = "\
 usage: cargo xtask <command> [options]
 
 commands:
-  verify [--quick]   run the verification cases of SPEC §6 (--quick: the CI subset, < 3 min)
+  verify [--quick]   run the verification cases (--quick: the CI subset, < 3 min)
   study [--quick]    measure the speed/accuracy trade and derive the presets (--quick: fewer runs)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
   dem                write the worked example's synthetic valley-side DEM (docs/examples/valley/)

@@ -243,7 +243,7 @@ pub fn write_table(chosen: &[(&'static str, Candidate)]) -> Result<()> {
     let mut table = String::new();
     let _ = writeln!(
         table,
-        "/// The table: (preset, settings), measured by `cargo xtask study` (README, \"Speed and accuracy\"):"
+        "/// The table: (preset, settings), measured by `cargo xtask study` (docs/verification.md, \"Presets\"):"
     );
     for (name, c) in chosen {
         let get = |k: Case| c.cases.iter().find(|x| x.0 == k).map_or(f64::NAN, |x| x.1);

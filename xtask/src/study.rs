@@ -1,4 +1,4 @@
-//! `cargo xtask study`: the speed/accuracy trade of SPEC §7, measured.
+//! `cargo xtask study`: the speed/accuracy trade, measured.
 //!
 //! Cases: the horizontal and inclined (30°) sliding blocks against eqs 21–22, the vibrating bar
 //! against its exact period, and the sand flume's runout (no exact answer: the finest run is the
@@ -60,7 +60,7 @@ fn measure(case: Case, d: &Discretisation) -> Measure {
             )
         }),
         Case::Flume => {
-            Err(CaseError::Setup("the flume runs through mpm-cli (see flume.rs)".into()))
+            Err(CaseError::Setup("the flume runs through mpm-run (see flume.rs)".into()))
         }
     }
 }

@@ -1,4 +1,4 @@
-//! `mpm`: the command line (clap only; the work is in the `mpm_cli` library).
+//! `mpm`: the command line (clap only; the work is in the `mpm_run` library).
 //!
 //! Exit codes: 0 success; 1 I/O or other failure (or the output directory is in use); 2 invalid
 //! scene, arguments or checkpoint; 3 the solver stopped with an instability (files up to the
@@ -12,8 +12,10 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+mod progress;
+
 use clap::{Parser, Subcommand, ValueEnum};
-use mpm_cli::{
+use mpm_run::{
     DEFAULT_SCENE, ElementTest, ElementTestOptions, OutputError, RunError, RunOptions, RunStatus,
     RunSummary, SCENES, Scene, SceneError,
 };
@@ -162,7 +164,7 @@ fn main() -> ExitCode {
             let opts = RunOptions {
                 out_dir: Some(out.clone()),
                 threads,
-                quiet,
+                progress: progress::Terminal::sink(quiet),
                 force,
                 stop_after: None,
                 interrupt: Some(signals.interrupt.clone()),
@@ -176,19 +178,19 @@ fn main() -> ExitCode {
                     out.display()
                 );
             }
-            finish(mpm_cli::run_scene(&scene, &opts), &out, quiet, &signals)
+            finish(mpm_run::run_scene(&scene, &opts), &out, quiet, &signals)
         }
         Command::Resume { dir, threads, quiet } => {
             let signals = signals();
             let opts = RunOptions {
                 out_dir: Some(dir.clone()),
                 threads,
-                quiet,
+                progress: progress::Terminal::sink(quiet),
                 force: false,
                 stop_after: None,
                 interrupt: Some(signals.interrupt.clone()),
             };
-            finish(mpm_cli::resume(&dir, &opts), &dir, quiet, &signals)
+            finish(mpm_run::resume(&dir, &opts), &dir, quiet, &signals)
         }
         Command::Section { dem, from, to, spacing, out, force } => {
             section(&dem, from, to, spacing, out.as_deref(), force)
@@ -198,7 +200,7 @@ fn main() -> ExitCode {
                 Ok(s) => s,
                 Err(e) => return scene_failure(&e),
             };
-            match mpm_cli::check_scene(&scene) {
+            match mpm_run::check_scene(&scene) {
                 Ok(r) => {
                     let c = scene.solver_config();
                     println!("{}: valid", scene.origin());
@@ -233,7 +235,7 @@ fn main() -> ExitCode {
         Command::Scenes { write, path, force } => match write {
             None => {
                 for (name, text) in SCENES {
-                    let title = mpm_cli::title_of(text).unwrap_or_default();
+                    let title = mpm_run::title_of(text).unwrap_or_default();
                     let default = if name == DEFAULT_SCENE { " (default)" } else { "" };
                     println!("{name:<20} {title}{default}");
                 }
@@ -241,7 +243,7 @@ fn main() -> ExitCode {
                 ExitCode::SUCCESS
             }
             Some(name) => {
-                let Some(text) = mpm_cli::embedded_scene(&name) else {
+                let Some(text) = mpm_run::embedded_scene(&name) else {
                     let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
                     eprintln!(
                         "error: no embedded scene `{name}`; choose one of {}",
@@ -307,7 +309,7 @@ fn main() -> ExitCode {
                 out_dir: out.clone(),
                 force,
             };
-            match mpm_cli::run_element_test(&opts) {
+            match mpm_run::run_element_test(&opts) {
                 Ok(cases) => {
                     for c in cases {
                         let first =
@@ -386,11 +388,11 @@ fn section(
 fn load(name: &str) -> Result<Scene, Box<SceneError>> {
     let path = Path::new(name);
     if !path.is_file() {
-        if let Some(text) = mpm_cli::embedded_scene(name) {
-            return mpm_cli::load_scene_str(text, &format!("embedded:{name}")).map_err(Box::new);
+        if let Some(text) = mpm_run::embedded_scene(name) {
+            return mpm_run::load_scene_str(text, &format!("embedded:{name}")).map_err(Box::new);
         }
     }
-    mpm_cli::load_scene_file(path).map_err(Box::new)
+    mpm_run::load_scene_file(path).map_err(Box::new)
 }
 
 fn stem(name: &str) -> String {

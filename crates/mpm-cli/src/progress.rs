@@ -1,10 +1,12 @@
-//! Progress reporting: an indicatif bar on a terminal (simulated time, steps/s, ETA), plain
-//! periodic lines when stderr is not a terminal, nothing when quiet.
+//! The command's [`Progress`]: an indicatif bar on a terminal (simulated time, steps/s, ETA),
+//! plain periodic lines when stderr is not a terminal, nothing when quiet.
 
 use std::io::IsTerminal;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
+use mpm_run::{Progress, ProgressSink};
 
 /// Time between plain progress lines.
 const PLAIN_EVERY: Duration = Duration::from_secs(2);
@@ -13,18 +15,37 @@ const BAR_EVERY: Duration = Duration::from_millis(100);
 /// The bar counts simulated time in microseconds.
 const TICKS_PER_S: f64 = 1e6;
 
-pub(crate) enum Progress {
+/// The state of the terminal's report; `Quiet` until a run starts.
+enum State {
     Quiet,
     Bar { bar: ProgressBar, last: Instant, start: Instant, steps0: u64 },
     Plain { last: Instant, start: Instant, steps0: u64, end: f64 },
 }
 
-impl Progress {
-    pub(crate) fn new(quiet: bool, end_time: f64, time: f64, steps: u64) -> Self {
-        let now = Instant::now();
+/// Progress on stderr; `mpm run --quiet` has none at all.
+pub(crate) struct Terminal(Mutex<State>);
+
+impl Terminal {
+    /// the sink of `mpm run` and `mpm resume`: nothing when quiet.
+    pub(crate) fn sink(quiet: bool) -> ProgressSink {
         if quiet {
-            Progress::Quiet
-        } else if std::io::stderr().is_terminal() {
+            ProgressSink::default()
+        } else {
+            ProgressSink::new(Terminal(Mutex::new(State::Quiet)))
+        }
+    }
+
+    fn with(&self, f: impl FnOnce(&mut State)) {
+        // A poisoned lock means a panic elsewhere already reported; keep drawing.
+        let mut g = self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        f(&mut g);
+    }
+}
+
+impl State {
+    fn new(end_time: f64, time: f64, steps: u64) -> Self {
+        let now = Instant::now();
+        if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new((end_time * TICKS_PER_S) as u64);
             if let Ok(style) = ProgressStyle::with_template(
                 "{bar:40.cyan/blue} {msg} [{elapsed_precise}, ETA {eta}]",
@@ -33,16 +54,16 @@ impl Progress {
             }
             bar.set_position((time * TICKS_PER_S) as u64);
             bar.reset_eta();
-            Progress::Bar { bar, last: now, start: now, steps0: steps }
+            State::Bar { bar, last: now, start: now, steps0: steps }
         } else {
-            Progress::Plain { last: now, start: now, steps0: steps, end: end_time }
+            State::Plain { last: now, start: now, steps0: steps, end: end_time }
         }
     }
 
-    pub(crate) fn update(&mut self, time: f64, steps: u64) {
+    fn update(&mut self, time: f64, steps: u64) {
         match self {
-            Progress::Quiet => {}
-            Progress::Bar { bar, last, start, steps0 } => {
+            State::Quiet => {}
+            State::Bar { bar, last, start, steps0 } => {
                 if last.elapsed() >= BAR_EVERY {
                     *last = Instant::now();
                     let rate = (steps - *steps0) as f64 / start.elapsed().as_secs_f64().max(1e-9);
@@ -53,7 +74,7 @@ impl Progress {
                     ));
                 }
             }
-            Progress::Plain { last, start, steps0, end } => {
+            State::Plain { last, start, steps0, end } => {
                 if last.elapsed() >= PLAIN_EVERY {
                     *last = Instant::now();
                     let elapsed = start.elapsed().as_secs_f64();
@@ -69,19 +90,38 @@ impl Progress {
         }
     }
 
-    /// prints a warning line (above the bar on a terminal); nothing when quiet.
-    pub(crate) fn warn(&self, message: &str) {
+    /// prints a line (above the bar on a terminal).
+    fn println(&self, line: String) {
         match self {
-            Progress::Quiet => {}
-            Progress::Bar { bar, .. } => bar.println(format!("mpm: warning: {message}")),
-            Progress::Plain { .. } => eprintln!("mpm: warning: {message}"),
+            State::Bar { bar, .. } => bar.println(line),
+            State::Quiet | State::Plain { .. } => eprintln!("{line}"),
         }
     }
+}
 
-    pub(crate) fn finish(&mut self) {
-        if let Progress::Bar { bar, .. } = self {
-            bar.finish_and_clear();
-        }
+impl Progress for Terminal {
+    fn start(&self, end_time: f64, time: f64, steps: u64) {
+        self.with(|s| *s = State::new(end_time, time, steps));
+    }
+
+    fn update(&self, time: f64, steps: u64) {
+        self.with(|s| s.update(time, steps));
+    }
+
+    fn warn(&self, message: &str) {
+        self.with(|s| s.println(format!("mpm: warning: {message}")));
+    }
+
+    fn note(&self, message: &str) {
+        self.with(|s| s.println(message.to_string()));
+    }
+
+    fn finish(&self) {
+        self.with(|s| {
+            if let State::Bar { bar, .. } = s {
+                bar.finish_and_clear();
+            }
+        });
     }
 }
 

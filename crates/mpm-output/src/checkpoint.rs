@@ -16,7 +16,7 @@
 //! times the payload's size, so between 16 and 256 times it (the largest expansion of any field
 //! is below 16: a `u16` material index is one varint byte), so even a checksummed file with a
 //! crafted length field cannot make it allocate more. What it decodes is
-//! checked again against the scene before the solver takes it (`mpm_cli::resume`).
+//! checked again against the scene before the solver takes it (`mpm_run::resume`).
 
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 //! functions exist, so there a preset's shape function is replaced by bilinear.
 //!
 //! The values come from the Pareto front of error against wall time that `cargo xtask study`
-//! measures (SPEC §7) on the sliding block, the vibrating bar and the flume; the study rewrites
+//! measures on the sliding block, the vibrating bar and the flume; the study rewrites
 //! this table. The figures of each preset are in the table's doc comment and the README.
 
 use mpm_solver::Scheme;
@@ -23,7 +23,7 @@ pub struct PresetSettings {
     pub courant: f64,
 }
 
-/// The table: (preset, settings), measured by `cargo xtask study` (README, "Speed and accuracy"):
+/// The table: (preset, settings), measured by `cargo xtask study` (docs/verification.md, "Presets"):
 /// fast: sliding block 0.156 %, bar 0.876 %, flume 13.076 % (worse of error and energy residual), 0.53 s.
 /// balanced: sliding block 0.091 %, bar 0.839 %, flume 13.076 % (worse of error and energy residual), 0.53 s.
 /// accurate: sliding block 0.017 %, bar 0.358 %, flume 9.682 % (worse of error and energy residual), 3.81 s.

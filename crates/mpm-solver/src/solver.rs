@@ -1,6 +1,8 @@
-//! The solver: state owned by the caller's scene, scratch memory owned here, and the step pipeline.
+//! The solver: it owns what a run changes (the particles handed to [`Solver::new`], its grid,
+//! materials and configuration, and scratch memory reused from step to step) and runs the step
+//! pipeline.
 //!
-//! One step (SPEC §1) runs these stages, each written once in `stages/`:
+//! One step runs these stages, the first six each written once in `stages/`:
 //! 1. **time step** (`timestep.rs`): Δt from the Courant number and the fastest signal (eq 13);
 //! 2. **locate** (`locate.rs`): stencils S_ip, G_ip of every particle, the sparse active-node set,
 //!    the particle bins that make particle-to-grid sums deterministic, the boundary nodes;
@@ -10,7 +12,9 @@
 //!    (eqs 14–18), Lagrangian velocity v^L (eq 5);
 //! 5. **grid to particle** (`g2p.rs`): particle position and velocity (eqs 6–7);
 //! 6. **stress update** (`stress.rs`): strain increment (eq 9), objective rotation, constitutive
-//!    update (eqs 10–11 or 23–25), density (eq 12).
+//!    update (eqs 10–11 or 23–25), density (eq 12);
+//! 7. **end-of-step guard** (`Solver::check_inside`): no particle may end a step outside the
+//!    grid or non-finite.
 //!
 //! A [`Scheme`] only orders stages 3–6 (see [`Solver::step`]).
 

@@ -27,7 +27,7 @@ fn a_bad_scene_exits_non_zero_with_its_location() {
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("bad.toml");
     let text =
-        mpm_cli::embedded_scene("free_fall").unwrap().replace("courant = 0.1", "courant = 2.0");
+        mpm_run::embedded_scene("free_fall").unwrap().replace("courant = 0.1", "courant = 2.0");
     std::fs::write(&file, text).unwrap();
     let (code, _, err) =
         mpm(&["run", file.to_str().unwrap(), "--out", dir.join("o").to_str().unwrap()]);
@@ -49,7 +49,7 @@ fn scenes_lists_and_writes() {
     let path = dir.join("f.toml");
     let (code, _, _) = mpm(&["scenes", "--write", "flume", path.to_str().unwrap()]);
     assert_eq!(code, 0);
-    assert_eq!(std::fs::read_to_string(&path).unwrap(), mpm_cli::embedded_scene("flume").unwrap());
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), mpm_run::embedded_scene("flume").unwrap());
     // not overwritten without --force
     let (code, _, _) = mpm(&["scenes", "--write", "flume", path.to_str().unwrap()]);
     assert_ne!(code, 0);

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use mpm_cli::{
+use mpm_run::{
     CHECKPOINT_FILE, OutputError, RunError, RunOptions, RunStatus, embedded_scene, load_scene_str,
     resume, run_scene,
 };
@@ -17,7 +17,7 @@ fn free_fall(edit: impl Fn(String) -> String) -> String {
 }
 
 fn opts(dir: &Path) -> RunOptions {
-    RunOptions { out_dir: Some(dir.to_path_buf()), quiet: true, ..Default::default() }
+    RunOptions { out_dir: Some(dir.to_path_buf()), ..Default::default() }
 }
 
 fn spawn(args: &[&str]) -> Child {
@@ -56,7 +56,7 @@ fn a_block_too_soft_to_stand_ends_with_the_energy_alarm_not_completed() {
     // the floor in one step and "completed" with exit 0.
     let text = free_fall(|t| t.replace("young = 1.0e6", "young = 1.0e-3"));
     let scene = load_scene_str(&text, "soft").unwrap();
-    let s = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let s = run_scene(&scene, &RunOptions::default()).unwrap();
     assert_eq!(s.status, RunStatus::EnergyAlarm, "{s:?}");
     assert_eq!(s.status.exit_code(), 4);
     // Measured −40 %; the alarm's threshold is 20 %.
@@ -68,7 +68,7 @@ fn a_block_too_soft_to_stand_ends_with_the_energy_alarm_not_completed() {
     // With energy_alarm_stop the run stops where the alarm trips.
     let stop = text.replace("[solver]", "[solver]\nenergy_alarm_stop = true");
     let scene = load_scene_str(&stop, "soft-stop").unwrap();
-    let t = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let t = run_scene(&scene, &RunOptions::default()).unwrap();
     assert_eq!(t.status, RunStatus::EnergyAlarm);
     assert!(t.simulated_time < s.simulated_time, "{} vs {}", t.simulated_time, s.simulated_time);
 }
@@ -83,7 +83,7 @@ fn a_run_that_reaches_max_steps_stops_with_the_step_limit() {
     // A run whose Δt shrinks below the estimate meets the limit during the run.
     let text = text.replace("max_steps = 1000000", "max_steps = 1500");
     let scene = load_scene_str(&text, "limit").unwrap();
-    let s = run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let s = run_scene(&scene, &RunOptions::default()).unwrap();
     assert_eq!(s.status, RunStatus::StepLimit, "{s:?}");
     assert_eq!((s.steps, s.status.exit_code()), (1500, 5));
     assert!(s.simulated_time < 1.0);
@@ -103,16 +103,16 @@ fn single_bit_flips_of_a_checkpoint_are_refused_not_resumed_to_another_answer() 
         let mut bad = good.clone();
         bad[bit / 8] ^= 1 << (bit % 8);
         std::fs::write(&path, &bad).unwrap();
-        let e = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+        let e = resume(&dir, &RunOptions::default()).unwrap_err();
         assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "bit {bit}: {e}");
     }
     // truncated
     std::fs::write(&path, &good[..good.len() / 2]).unwrap();
-    let e = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+    let e = resume(&dir, &RunOptions::default()).unwrap_err();
     assert!(e.to_string().contains("truncated"), "{e}");
     // and the intact file still resumes
     std::fs::write(&path, &good).unwrap();
-    let s = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let s = resume(&dir, &RunOptions::default()).unwrap();
     assert_eq!(s.status, RunStatus::Completed);
     std::fs::remove_dir_all(&dir).unwrap();
 }

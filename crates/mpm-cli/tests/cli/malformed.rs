@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use mpm_cli::load_scene_str;
+use mpm_run::load_scene_str;
 
 #[test]
 fn every_malformed_scene_is_refused_with_its_specific_message() {
@@ -56,7 +56,7 @@ fn every_malformed_scene_is_refused_with_its_specific_message() {
 #[test]
 fn errors_point_at_the_offending_line() {
     let text =
-        mpm_cli::embedded_scene("free_fall").unwrap().replace("poisson = 0.3", "poisson = 0.7");
+        mpm_run::embedded_scene("free_fall").unwrap().replace("poisson = 0.3", "poisson = 0.7");
     let line = text.lines().position(|l| l.starts_with("poisson")).unwrap() + 1;
     let e = load_scene_str(&text, "x.toml").unwrap_err();
     assert_eq!(e.path, "materials.block.poisson");
@@ -68,7 +68,7 @@ fn errors_point_at_the_offending_line() {
 fn arbitrary_bytes_never_panic() {
     // A cheap fuzz: truncations and byte flips of a valid scene are refused or accepted, never a
     // panic.
-    let text = mpm_cli::embedded_scene("sliding_horizontal").unwrap();
+    let text = mpm_run::embedded_scene("sliding_horizontal").unwrap();
     let bytes = text.as_bytes();
     for cut in (0..bytes.len()).step_by(7) {
         let _ = load_scene_str(&String::from_utf8_lossy(&bytes[..cut]), "cut.toml");

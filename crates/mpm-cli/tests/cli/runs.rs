@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use mpm_cli::{
+use mpm_run::{
     CHECKPOINT_FILE, OutputError, RunError, RunOptions, RunStatus, Scene, embedded_scene,
     load_scene_str, resume, run_scene,
 };
@@ -22,7 +22,7 @@ fn short(name: &str, end_time: f64) -> Scene {
 }
 
 fn opts(dir: &Path) -> RunOptions {
-    RunOptions { out_dir: Some(dir.to_path_buf()), quiet: true, ..Default::default() }
+    RunOptions { out_dir: Some(dir.to_path_buf()), ..Default::default() }
 }
 
 #[test]
@@ -139,15 +139,14 @@ fn resume_continues_bit_identically() {
         })
         .unwrap();
     for (name, scene) in [("perfect", perfect), ("hardening", hardening)] {
-        let straight =
-            run_scene(&scene, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+        let straight = run_scene(&scene, &RunOptions::default()).unwrap();
         let dir = temp_dir(&format!("resume_{name}"));
         let stopped =
             run_scene(&scene, &RunOptions { stop_after: Some(0.025), ..opts(&dir) }).unwrap();
         assert_eq!(stopped.status, RunStatus::Interrupted);
         assert!(stopped.simulated_time < 0.06 && stopped.steps < straight.steps);
         assert!(dir.join(CHECKPOINT_FILE).exists());
-        let resumed = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+        let resumed = resume(&dir, &RunOptions::default()).unwrap();
         assert_eq!(resumed.status, RunStatus::Completed, "{name}");
         assert_eq!(resumed.steps, straight.steps, "{name}");
         assert_eq!(resumed.simulated_time.to_bits(), straight.simulated_time.to_bits());
@@ -197,7 +196,7 @@ fn a_resumed_run_writes_the_files_of_an_uninterrupted_one() {
     let stop_row = *row_times(&std::fs::read(dir.join("energy.csv")).unwrap()).last().unwrap();
     let rows = row_times(&std::fs::read(straight.join("energy.csv")).unwrap());
     assert!(!rows.contains(&stop_row), "the stop's row at {stop_row} s is not a series row");
-    resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    resume(&dir, &RunOptions::default()).unwrap();
     let (a, b) = (deterministic_files(&straight), deterministic_files(&dir));
     assert_eq!(
         a.iter().map(|f| &f.0).collect::<Vec<_>>(),
@@ -224,7 +223,7 @@ fn a_killed_run_resumes_without_duplicate_or_torn_rows() {
     torn.extend_from_slice(b"0.0412,57,1.2e-");
     std::fs::write(dir.join("energy.csv"), &torn).unwrap();
     // The last periodic checkpoint is at t ≈ 0.03 s, before a quarter of the rows.
-    resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    resume(&dir, &RunOptions::default()).unwrap();
     let resumed = std::fs::read(dir.join("energy.csv")).unwrap();
     let times = row_times(&resumed);
     assert!(times.windows(2).all(|w| w[0] < w[1]), "rows repeated or out of order");
@@ -261,7 +260,7 @@ fn a_checkpoint_of_another_format_is_refused_by_name() {
     std::fs::create_dir_all(&dir).unwrap();
     // bincode's varint 1 (the format before the history carried the output time), then junk
     std::fs::write(dir.join(CHECKPOINT_FILE), [1u8, 7, 7, 7]).unwrap();
-    let err = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap_err();
+    let err = resume(&dir, &RunOptions::default()).unwrap_err();
     assert!(matches!(err, RunError::Output(OutputError::Checkpoint { .. })), "{err}");
     let expected = format!("format 1 but this mpm reads format {}", mpm_output::checkpoint::FORMAT);
     assert!(err.to_string().contains(&expected), "{err}");
@@ -275,7 +274,7 @@ fn periodic_checkpoints_resume_bit_identically() {
     let dir = temp_dir("periodic");
     let full = run_scene(&scene, &opts(&dir)).unwrap();
     // The last periodic checkpoint (t ≈ 0.03 s) resumes to the same end state.
-    let resumed = resume(&dir, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+    let resumed = resume(&dir, &RunOptions::default()).unwrap();
     assert_eq!(resumed.state_hash, full.state_hash);
     assert_eq!(resumed.steps, full.steps);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -409,7 +408,7 @@ fn a_run_compared_with_an_observed_deposit_reports_its_errors_and_overlap() {
                 f.output.reference = None;
                 f.output.envelope = Some(true);
                 f.output.observed = observed
-                    .map(|p| mpm_cli::scene::ObservedSpec { deposit: p.display().to_string() });
+                    .map(|p| mpm_run::scene::ObservedSpec { deposit: p.display().to_string() });
             })
             .unwrap()
     };
@@ -453,8 +452,8 @@ fn the_implicit_initial_state_runs_before_the_first_step_and_its_failure_is_an_i
     let implicit = |name: &str, end: f64| {
         short(name, end)
             .modified(|f| {
-                f.initial_state = Some(mpm_cli::scene::InitialStateSpec {
-                    method: mpm_cli::scene::InitialStateMethod::Implicit,
+                f.initial_state = Some(mpm_run::scene::InitialStateSpec {
+                    method: mpm_run::scene::InitialStateMethod::Implicit,
                     ..Default::default()
                 })
             })
@@ -487,7 +486,7 @@ fn the_implicit_initial_state_runs_before_the_first_step_and_its_failure_is_an_i
 /// shows the kinetic energy at or below the stated fraction of its peak over the stated time.
 #[test]
 fn stop_at_rest_ends_the_flume_once_its_deposit_rests() {
-    use mpm_cli::scene::StopAtRestSpec;
+    use mpm_run::scene::StopAtRestSpec;
     let (fraction, duration) = (1e-6, 0.5);
     let scene = short("flume", 20.0)
         .modified(|f| {

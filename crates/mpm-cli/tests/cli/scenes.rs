@@ -1,6 +1,6 @@
 //! The embedded scenes parse, validate and build.
 
-use mpm_cli::{SCENES, check_scene, embedded_scene, load_scene_str};
+use mpm_run::{SCENES, check_scene, embedded_scene, load_scene_str};
 
 #[test]
 fn every_embedded_scene_is_valid_and_builds() {
@@ -30,17 +30,17 @@ fn flume_has_the_papers_table_2() {
     let p = f.grid.profile.as_ref().and_then(|p| p.points()).unwrap();
     let slope = ((p[0][1] - p[1][1]) / (p[1][0] - p[0][0])).atan().to_degrees();
     assert!((slope - 30.0).abs() < 1e-9);
-    assert_eq!(f.boundaries.ground, Some(mpm_cli::scene::BoundarySpec::FrictionAngleDeg(27.0)));
+    assert_eq!(f.boundaries.ground, Some(mpm_run::scene::BoundarySpec::FrictionAngleDeg(27.0)));
     // 24 × 14, the lattice closest to the paper's 334 particles
     assert_eq!(scene.particle_count(), 336);
-    assert_eq!(scene.solver_config().scheme, mpm_cli::scene::Scheme::Usavg);
+    assert_eq!(scene.solver_config().scheme, mpm_run::scene::Scheme::Usavg);
     assert!(scene.solver_config().objective_stress);
 }
 
 #[test]
 fn an_unknown_scene_name_has_no_text() {
     assert!(embedded_scene("nonexistent").is_none());
-    assert!(embedded_scene(mpm_cli::DEFAULT_SCENE).is_some());
+    assert!(embedded_scene(mpm_run::DEFAULT_SCENE).is_some());
 }
 
 /// The valley example's terrain and release mass come from its DEM and rupture CSV; the GeoTIFF
@@ -49,7 +49,7 @@ fn an_unknown_scene_name_has_no_text() {
 fn the_valley_example_reads_the_same_from_its_ascii_grid_and_its_geotiff() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../docs/examples/valley_landslide.toml");
-    let asc = mpm_cli::load_scene_file(&path).unwrap();
+    let asc = mpm_run::load_scene_file(&path).unwrap();
     let text =
         std::fs::read_to_string(&path).unwrap().replace("valley_side.asc", "valley_side.tif");
     let dir = path.parent().unwrap();
@@ -73,7 +73,7 @@ fn an_observed_deposit_is_read_checked_and_explained() {
     std::fs::create_dir_all(&dir).unwrap();
     let text = format!(
         "{}\nobserved = {{ deposit = \"o.csv\" }}\n",
-        mpm_cli::embedded_scene("sliding_horizontal").unwrap()
+        mpm_run::embedded_scene("sliding_horizontal").unwrap()
     );
     let load = |csv: &str| {
         std::fs::write(dir.join("o.csv"), csv).unwrap();

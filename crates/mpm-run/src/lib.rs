@@ -1,4 +1,6 @@
-//! The `mpm` front end as a library: scene files in, ParaView/CSV/PNG files out.
+//! The run driver as a library: scene files in, ParaView/CSV/PNG files out. The `mpm` command,
+//! `cargo xtask` and the tests drive runs through it; any other front end (bindings, a GUI)
+//! can too, with its own [`Progress`].
 //!
 //! - [`load_scene_str`] parses and validates a TOML scene ([`scene`] is the data model,
 //!   `docs/scene-format.md` its reference). Every refusal is a [`SceneError`] naming the file,
@@ -9,6 +11,8 @@
 //!   as `summary.json`); [`resume`] continues a run from its checkpoint bit-identically;
 //!   [`check_scene`] validates fully without stepping.
 //! - [`run_element_test`] runs the constitutive element tests.
+//! - [`Progress`] receives a run's progress, warnings and reports; nothing is printed without
+//!   one.
 //!
 //! The solver is generic over the constitutive model and the shape functions; `mpm_scene::dispatch`
 //! picks them once per scene, so no per-particle dynamic dispatch happens.
@@ -21,17 +25,20 @@
 //! energy.csv            energy ledger over time
 //! probes.csv            probe particles (when the scene declares probes)
 //! runout.csv            front, tail, max thickness, centre-of-mass travel over time
-//! plots/*.png           energy, probes (with the analytic curve), runout, deposit
-//! checkpoint.bin        written every output.checkpoint_interval and on Ctrl-C
+//! envelope.csv          per ground station: largest thickness, speeds, pressure, arrival
+//! deposit.csv           per ground station: the final deposit's thickness (with envelope)
+//! plots/*.png           energy, probes (with the analytic curve), runout, deposit, envelope
+//! checkpoint.bin        written every output.checkpoint_interval, on Ctrl-C and SIGTERM
+//! .mpm.lock             while a run writes here: the process that does
 //! ```
 //!
 //! ```
-//! use mpm_cli::{RunOptions, embedded_scene, load_scene_str, run_scene};
+//! use mpm_run::{RunOptions, embedded_scene, load_scene_str, run_scene};
 //!
 //! let text = embedded_scene("free_fall").unwrap();
 //! let scene = load_scene_str(text, "embedded:free_fall").unwrap();
 //! let short = scene.modified(|f| f.solver.end_time = 0.01).unwrap();
-//! let summary = run_scene(&short, &RunOptions { quiet: true, ..Default::default() }).unwrap();
+//! let summary = run_scene(&short, &RunOptions::default()).unwrap();
 //! assert!(summary.steps > 0);
 //! ```
 
@@ -44,13 +51,15 @@ mod error;
 mod progress;
 mod run;
 
+pub use progress::{Progress, ProgressSink};
+
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
 pub use mpm_output::OutputError;
 pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
-// The scene library, re-exported so that `mpm_cli::` users keep one import path.
+// The scene library, re-exported so that a front end needs one import path.
 pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
 pub use mpm_scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_SCENE, SCENES, Scene, SceneError, embedded_scene,

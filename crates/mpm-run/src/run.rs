@@ -34,7 +34,7 @@ use mpm_output::report::{self, Deposit};
 use mpm_output::{OutputError, atomic, vtk};
 
 use crate::error::RunError;
-use crate::progress::Progress;
+use crate::progress::ProgressSink;
 
 /// How to run a scene.
 #[derive(Clone, Debug, Default)]
@@ -43,8 +43,8 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// rayon threads; `None` uses rayon's default (one per core).
     pub threads: Option<usize>,
-    /// no progress output.
-    pub quiet: bool,
+    /// where progress, warnings and reports go; the default reports nothing.
+    pub progress: ProgressSink,
     /// overwrite an existing, non-empty output directory.
     pub force: bool,
     /// stop (as on Ctrl-C, writing a checkpoint) after the first step that reaches this
@@ -286,7 +286,7 @@ impl Job for RunJob<'_> {
             }
         };
         let (initial, initial_error) = if fresh {
-            match initial_state(&mut solver, &r.initial_state, self.opts.quiet) {
+            match initial_state(&mut solver, &r.initial_state, &self.opts.progress) {
                 Ok(summary) => (summary, None),
                 Err(e) => (None, Some(e)),
             }
@@ -299,18 +299,14 @@ impl Job for RunJob<'_> {
             dir: self.out_dir.as_deref(),
             history,
             flushed: Flushed::default(),
-            progress: Progress::new(
-                self.opts.quiet,
-                r.end_time,
-                solver.time(),
-                solver.step_count(),
-            ),
+            progress: self.opts.progress.clone(),
             interrupt: self.opts.interrupt.clone(),
             stop_after: self.opts.stop_after,
             io_error: None,
             stop: None,
             rest: RestWatch::default(),
         };
+        driver.progress.start(r.end_time, solver.time(), solver.step_count());
         if let Some(rest) = r.stop_at_rest {
             driver.rest = RestWatch::over(&driver.history.energy, rest.kinetic_fraction);
         }
@@ -440,7 +436,7 @@ struct Driver<'a> {
     dir: Option<&'a Path>,
     history: History,
     flushed: Flushed,
-    progress: Progress,
+    progress: ProgressSink,
     interrupt: Option<Arc<AtomicBool>>,
     stop_after: Option<f64>,
     io_error: Option<RunError>,
@@ -488,11 +484,11 @@ impl RestWatch {
 }
 
 /// finds a new run's initial stresses as the scene asks (`[initial_state]`), timed and reported
-/// on stderr unless `quiet`; `Ok(None)` for a stress-free start.
+/// to `progress`; `Ok(None)` for a stress-free start.
 fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     solver: &mut Solver<M, S, N>,
     how: &InitialState,
-    quiet: bool,
+    progress: &ProgressSink,
 ) -> Result<Option<InitialStateSummary>, SolverError> {
     let start = Instant::now();
     let summary = match *how {
@@ -524,10 +520,10 @@ fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         }
     };
     let summary = InitialStateSummary { wall_time_s: start.elapsed().as_secs_f64(), ..summary };
-    if !quiet {
+    {
         let s = &summary;
-        match s.method.as_str() {
-            "implicit" => eprintln!(
+        progress.note(&match s.method.as_str() {
+            "implicit" => format!(
                 "initial state (implicit): {} load step(s), {} Newton iterations, residual \
                  {:.2e}, {} particles plastic, {} surface nodes tied, largest displacement \
                  {:.3e} m, {:.2} s",
@@ -539,14 +535,14 @@ fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
                 s.max_displacement.unwrap_or(0.0),
                 s.wall_time_s
             ),
-            _ => eprintln!(
+            _ => format!(
                 "initial state (gravity ramp): {} steps, kinetic energy left {:.3e} J/m \
                  (dropped), {:.2} s",
                 s.steps.unwrap_or(0),
                 s.kinetic_energy.unwrap_or(0.0),
                 s.wall_time_s
             ),
-        }
+        });
     }
     Ok(Some(summary))
 }
@@ -930,12 +926,8 @@ mod tests {
             .replace("end_time = 1.0", "end_time = 0.02");
         let scene = load_scene_str(&text, "free_fall").unwrap();
         let dir = std::env::temp_dir().join(format!("mpm-fits-{}", std::process::id()));
-        let opts = RunOptions {
-            out_dir: Some(dir.clone()),
-            quiet: true,
-            stop_after: Some(0.01),
-            ..Default::default()
-        };
+        let opts =
+            RunOptions { out_dir: Some(dir.clone()), stop_after: Some(0.01), ..Default::default() };
         run_scene(&scene, &opts).unwrap();
         let path = dir.join(checkpoint::FILE_NAME);
         let good = checkpoint::read(&path).unwrap();
@@ -960,8 +952,8 @@ mod tests {
             let mut bad = good.clone();
             edit(&mut bad);
             checkpoint::write(&path, &bad).unwrap();
-            let RunOptions { threads, quiet, .. } = opts.clone();
-            let e = resume(&dir, &RunOptions { threads, quiet, ..Default::default() }).unwrap_err();
+            let e = resume(&dir, &RunOptions { threads: opts.threads, ..Default::default() })
+                .unwrap_err();
             assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{expect}: {e}");
             assert!(e.to_string().contains(expect), "{expect}: {e}");
         }
