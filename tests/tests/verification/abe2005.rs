@@ -44,13 +44,6 @@ fn abe2005_sliding_block_horizontal_fine() {
     check_sliding("fine", &r);
 }
 
-#[test]
-fn sliding_block_is_bit_identical_with_one_and_two_threads() {
-    let one = slide_horizontal(0.5, 1).position_bits;
-    let two = slide_horizontal(0.5, 2).position_bits;
-    assert_eq!(one, two);
-}
-
 /// (along-slope travel of the centre of mass, of the bottom particle row) at time `t` for a block
 /// at rest on a slope θ, 0.25 m columns, 2 × 2 particles per cell, USAVG, C = 0.1.
 fn slide_inclined(theta_deg: f64, t: f64, gravity_ramp: f64) -> (f64, f64) {

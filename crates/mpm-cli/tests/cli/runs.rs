@@ -519,3 +519,36 @@ fn stop_at_rest_ends_the_flume_once_its_deposit_rests() {
     assert!(end - since >= duration - 1e-9, "stopped after {} s at rest", end - since);
     assert!(end - since < duration + 0.1 - 1e-9, "stopped {} s after coming to rest", end - since);
 }
+
+/// A collapsing Drucker-Prager column large enough that every parallel loop is split: 4 800
+/// particles are 8 chunks of 600 for the fixed-order sums and 3 threads' worth of work
+/// (`useful_threads` gives one per 1 200 particles), and a 40 × 30-cell body covers 6 × 5 node
+/// blocks of 8 × 8, so the block scatter's patches overlap between blocks. It slides on a Coulomb
+/// floor against a wall, so contact, plasticity and the PIC share all run. The final state's
+/// hash (every particle's position, velocity, stress and state, the clock and the dissipation)
+/// must be the same with 1, 2 and 3 threads.
+#[test]
+fn a_collapsing_column_is_bit_identical_with_one_two_and_three_threads() {
+    let text = "title = \"threads\"\n\
+        [grid]\nkind = \"regular\"\norigin = [0.0, 0.0]\ncell = [0.01, 0.01]\ncells = [80, 40]\n\
+        [materials.sand]\nkind = \"drucker_prager\"\nyoung = 2.0e6\npoisson = 0.3\n\
+        density = 1600.0\ncohesion = 0.0\nfriction_angle_deg = 30.0\n\
+        [[bodies]]\nmaterial = \"sand\"\nshape = \"rectangle\"\nmin = [0.0, 0.0]\n\
+        max = [0.4, 0.3]\nparticles_per_cell = 2\n\
+        [boundaries]\nground = { friction_angle_deg = 30.0 }\nleft_wall = \"frictionless\"\n\
+        [solver]\nend_time = 0.04\n[output]\ninterval = 0.04\n";
+    let scene = load_scene_str(text, "threads").unwrap();
+    assert_eq!(scene.particle_count(), 4800);
+    let hashes: Vec<(String, u64)> = [1, 2, 3]
+        .map(|threads| {
+            let s = run_scene(&scene, &RunOptions { threads: Some(threads), ..Default::default() })
+                .unwrap();
+            assert_eq!(s.status, RunStatus::Completed);
+            assert_eq!(s.threads, threads, "the scene is large enough for {threads} threads");
+            (s.state_hash, s.steps)
+        })
+        .into();
+    assert!(hashes[0].1 > 1000, "a real run: {} steps", hashes[0].1);
+    assert_eq!(hashes[0], hashes[1], "1 against 2 threads");
+    assert_eq!(hashes[0], hashes[2], "1 against 3 threads");
+}
