@@ -165,6 +165,12 @@ fn panel(
             x1 = mid + 0.5 * sy * w;
         }
     }
+    let y_top = y1;
+    let legend = legend_corner(area.dim_in_pixel(), series, (x0, x1), &mut y1, y0);
+    if c.equal_aspect && y1 != y_top {
+        // keep the aspect: widen x by the factor the legend's band raised y
+        x1 = x0 + (x1 - x0) * (y1 - y0) / (y_top - y0);
+    }
     let fail = |e: &dyn std::fmt::Display| e.to_string();
     let mut chart = ChartBuilder::on(area)
         .caption(c.title, ("sans-serif", 22))
@@ -178,6 +184,8 @@ fn panel(
         .x_desc(c.x_label)
         .y_desc(c.y_label)
         .label_style(("sans-serif", 14))
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .axis_desc_style(("sans-serif", 16))
         .light_line_style(WHITE.mix(0.0))
         .draw()
@@ -208,15 +216,146 @@ fn panel(
             });
         }
     }
-    if any_legend {
+    if let (true, Some(corner)) = (any_legend, legend) {
         chart
             .configure_series_labels()
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperRight)
+            .position(corner)
             .draw()
             .map_err(|e| fail(&e))?;
     }
     Ok(())
+}
+
+/// a tick label readable at any magnitude: plain with at most three decimals between 0.01 and
+/// 10 000, else in scientific notation (a residual of 3e8 J/m is `3.0e8`, not `300000000.0`
+/// cut by the label area).
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-2..1e4).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// Where the legend goes so that it covers no data: the first corner of the plotting area
+/// (upper right, upper left, lower right, lower left) whose legend-sized box holds no point of
+/// any series; when every corner holds some, the y range is raised (`y1`) until the band above
+/// the data fits the legend, which then sits upper right. `None` without named series.
+fn legend_corner(
+    (width, height): (u32, u32),
+    series: &[Series],
+    (x0, x1): (f64, f64),
+    y1: &mut f64,
+    y0: f64,
+) -> Option<SeriesLabelPosition> {
+    let named: Vec<&Series> = series.iter().filter(|s| !s.name.is_empty()).collect();
+    if named.is_empty() {
+        return None;
+    }
+    // the plotting area (the chart's margins and label areas off) and the legend's box in it:
+    // 18 px a line plus its frame, 7 px a character plus the sample line
+    let (w, h) = ((f64::from(width) - 100.0).max(50.0), (f64::from(height) - 100.0).max(50.0));
+    let chars = named.iter().map(|s| s.name.chars().count()).max().unwrap_or(0) as f64;
+    let (fw, fh) =
+        (((chars * 7.5 + 50.0) / w).min(0.9), ((named.len() as f64 * 18.0 + 16.0) / h).min(0.9));
+    let span_y = *y1 - y0;
+    let inside = |(bx0, bx1): (f64, f64), (by0, by1): (f64, f64)| {
+        series.iter().flat_map(|s| &s.points).any(|&(x, y)| {
+            let (u, v) = ((x - x0) / (x1 - x0), (y - y0) / span_y);
+            u >= bx0 && u <= bx1 && v >= by0 && v <= by1
+        })
+    };
+    let (left, right, low, high) = ((0.0, fw), (1.0 - fw, 1.0), (0.0, fh), (1.0 - fh, 1.0));
+    for (corner, bx, by) in [
+        (SeriesLabelPosition::UpperRight, right, high),
+        (SeriesLabelPosition::UpperLeft, left, high),
+        (SeriesLabelPosition::LowerRight, right, low),
+        (SeriesLabelPosition::LowerLeft, left, low),
+    ] {
+        if !inside(bx, by) {
+            return Some(corner);
+        }
+    }
+    // a free band on top, with a gap of 2 % of the axis: the data's span becomes (1 − fh − 0.02)
+    // of it
+    *y1 = y0 + span_y / (1.0 - fh - 0.02);
+    Some(SeriesLabelPosition::UpperRight)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(name: &str, points: Vec<(f64, f64)>) -> Series {
+        Series { name: name.into(), points, style: Style::Line, color: 0 }
+    }
+
+    /// the fraction of the legend's box (as `legend_corner` sizes it) at `corner` that holds a
+    /// point of `series`, over the axis ranges given.
+    fn covered(
+        series: &[Series],
+        corner: &SeriesLabelPosition,
+        (x0, x1, y0, y1): (f64, f64, f64, f64),
+        (fw, fh): (f64, f64),
+    ) -> bool {
+        let (bx, by) = match corner {
+            SeriesLabelPosition::UpperRight => ((1.0 - fw, 1.0), (1.0 - fh, 1.0)),
+            SeriesLabelPosition::UpperLeft => ((0.0, fw), (1.0 - fh, 1.0)),
+            SeriesLabelPosition::LowerRight => ((1.0 - fw, 1.0), (0.0, fh)),
+            _ => ((0.0, fw), (0.0, fh)),
+        };
+        series.iter().flat_map(|s| &s.points).any(|&(x, y)| {
+            let (u, v) = ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
+            (bx.0..=bx.1).contains(&u) && (by.0..=by.1).contains(&v)
+        })
+    }
+
+    /// A decaying curve (an energy plot) fills the upper left: the legend goes where no point
+    /// is. Curves through every corner: the axis grows a free band on top and the legend sits
+    /// in it. 600 × 420 px, two series of 16-character names (the box `legend_corner` sizes:
+    /// (16 × 7.5 + 50)/500 wide, (2 × 18 + 16)/320 high).
+    #[test]
+    fn the_legend_covers_no_point() {
+        let size = (600, 420);
+        let fb = ((16.0 * 7.5 + 50.0) / 500.0, (2.0 * 18.0 + 16.0) / 320.0);
+        let decay: Vec<(f64, f64)> =
+            (0..=100).map(|i| (i as f64, (-(i as f64) / 10.0).exp())).collect();
+        let flat: Vec<(f64, f64)> = (0..=100).map(|i| (i as f64, 0.5)).collect();
+        let s = [line("kinetic energy..", decay), line("dissipated......", flat)];
+        let (x0, x1, y0, mut y1) = (0.0, 100.0, 0.0, 1.0);
+        let corner = legend_corner(size, &s, (x0, x1), &mut y1, y0).unwrap();
+        assert_eq!(y1, 1.0, "a free corner needs no band");
+        assert!(!covered(&s, &corner, (x0, x1, y0, y1), fb), "{corner:?}");
+        // every corner holds a point
+        let corners = vec![(0.0, 0.0), (100.0, 0.0), (0.0, 1.0), (100.0, 1.0)];
+        let s = [line("kinetic energy..", corners), line("dissipated......", vec![])];
+        let (x0, x1, y0, mut y1) = (0.0, 100.0, 0.0, 1.0);
+        let corner = legend_corner(size, &s, (x0, x1), &mut y1, y0).unwrap();
+        assert!(y1 > 1.0 / (1.0 - fb.1) - 1e-12, "the top band fits the legend: y1 = {y1}");
+        assert!(!covered(&s, &corner, (x0, x1, y0, y1), fb), "{corner:?}");
+        // no named series, no legend
+        let mut y1 = 1.0;
+        assert!(
+            legend_corner(size, &[line("", vec![(0.0, 0.0)])], (0.0, 1.0), &mut y1, 0.0).is_none()
+        );
+    }
+
+    #[test]
+    fn tick_labels_stay_short_at_any_magnitude() {
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(1500.0), "1500");
+        assert_eq!(tick(-3.0e8), "-3.0e8");
+        assert_eq!(tick(2.5e-5), "2.5e-5");
+        for v in [1e-300, 3.7e-7, 0.0123, 12.5, 9999.0, 1e12, -4.4e20] {
+            assert!(tick(v).len() <= 8, "{v}: {}", tick(v));
+        }
+    }
 }

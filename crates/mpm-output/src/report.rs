@@ -4,7 +4,6 @@
 use std::path::Path;
 
 use mpm_scene::envelope::{self, Envelope};
-use mpm_scene::summary;
 use mpm_scene::{RunoutMetrics, Scene, ground_height};
 use mpm_solver::Vector;
 
@@ -75,7 +74,10 @@ fn probes(plot_dir: &Path, scene: &Scene, h: &History, time: f64) -> Result<(), 
     let mut series = Vec::new();
     for (k, &i) in r.output.probes.iter().enumerate() {
         series.push(Series {
-            name: format!("particle {i}"),
+            name: {
+                let x = r.seeds[i].position;
+                format!("probe {} (particle {i}, from ({:.3}, {:.3}) m)", k + 1, x.x, x.y)
+            },
             points: h.probes.iter().filter(|p| p.probe == k).map(|p| (p.time, p.along)).collect(),
             style: Style::Line,
             color: k,
@@ -167,7 +169,7 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
     // the free surface, down to the ground across empty columns (not a line bridging a gap)
     let mut surface: Vec<(f64, f64)> = Vec::new();
     let mut last_x = f64::NEG_INFINITY;
-    for (x, top, _) in summary::surface(positions, &r.ground, r.spacing, column) {
+    for (x, top, _) in mpm_scene::surface(positions, &r.ground, r.spacing, column) {
         if x - last_x > 1.5 * column && last_x.is_finite() {
             let (a, b) = (last_x + column, x - column);
             surface.push((a, ground_height(&r.ground, a)));
