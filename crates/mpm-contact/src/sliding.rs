@@ -56,7 +56,11 @@ impl RigidSlide {
         if a <= 0.0 && self.v0 == 0.0 {
             return 0.0;
         }
-        let t = t.min(self.stop_time());
+        if a < 0.0 && t >= self.stop_time() {
+            // stopped: v0²/(2|a|), which stays finite (zero) where friction so large that a
+            // overflows made the sliding form ∞ × 0
+            return self.v0 * self.v0 / (2.0 * -a);
+        }
         self.v0 * t + 0.5 * a * t * t
     }
 }
@@ -77,6 +81,10 @@ mod tests {
         // 1e-12 relative: the two forms differ by a few roundings.
         assert!((s.displacement(t_stop) - d).abs() < 1e-12 * d);
         assert_eq!(s.displacement(2.0 * t_stop), s.displacement(t_stop));
+        // friction so large that a overflows (μ = 1e308): stopped at once, after no travel.
+        let stuck = RigidSlide { mu: 1e308, ..s };
+        assert_eq!(stuck.displacement(0.0), 0.0);
+        assert_eq!(stuck.displacement(1.0), 0.0);
         // frictionless: uniform motion for ever.
         let free = RigidSlide { mu: 0.0, ..s };
         assert_eq!(free.stop_time(), f64::INFINITY);

@@ -21,9 +21,14 @@ use crate::raster::{MAX_CELLS, Raster};
 
 /// Reads the ESRI ASCII grid at `path`.
 pub fn read(path: &Path) -> Result<Raster, DemError> {
+    use std::io::Read;
     let file = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|source| DemError::Io { file: file.clone(), source })?;
+    let size = crate::read::regular_file(path)?;
+    // at most the length the file had when it was looked at (a file still growing is cut)
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(size).read_to_end(&mut bytes))
+        .map_err(|source| DemError::Io { file: file.clone(), source })?;
     let text = std::str::from_utf8(&bytes).map_err(|e| {
         let at = e.valid_up_to();
         DemError::Data {
@@ -49,12 +54,15 @@ struct Header {
     nodata: Option<f64>,
 }
 
-/// Parses an ASCII grid held in `text` (`bytes` long on disk), naming it `file` in errors.
-pub(crate) fn parse(text: &str, file: &str, bytes: u64) -> Result<Raster, DemError> {
+/// reads the header lines (up to the first height) of an ESRI ASCII grid: its keys and the
+/// bytes they took.
+fn read_header<'a, I: Iterator<Item = (usize, &'a str)>>(
+    lines: &mut std::iter::Peekable<I>,
+    file: &str,
+) -> Result<(Header, u64), DemError> {
     let header_err =
         |line: usize, problem: String| DemError::Header { file: file.into(), line, problem };
     let mut h = Header::default();
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).peekable();
     let mut header_bytes = 0u64;
     while let Some(&(n, line)) = lines.peek() {
         let mut tokens = line.split_whitespace();
@@ -123,6 +131,15 @@ pub(crate) fn parse(text: &str, file: &str, bytes: u64) -> Result<Raster, DemErr
         header_bytes += line.len() as u64 + 1;
         lines.next();
     }
+    Ok((h, header_bytes))
+}
+
+/// Parses an ASCII grid held in `text` (`bytes` long on disk), naming it `file` in errors.
+pub(crate) fn parse(text: &str, file: &str, bytes: u64) -> Result<Raster, DemError> {
+    let header_err =
+        |line: usize, problem: String| DemError::Header { file: file.into(), line, problem };
+    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).peekable();
+    let (h, header_bytes) = read_header(&mut lines, file)?;
     let first_data = lines.peek().map_or(1, |&(n, _)| n);
     let missing = |key: &str| header_err(first_data, format!("the header has no `{key}`"));
     let cols = h.cols.ok_or_else(|| missing("ncols"))?;

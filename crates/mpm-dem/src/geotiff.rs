@@ -32,6 +32,7 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
     let io = |source| DemError::Io { file: file.clone(), source };
     let problem = |p: String| DemError::GeoTiff { file: file.clone(), problem: p };
     let tiff = |e: tiff::TiffError| problem(format!("not a readable TIFF: {e}"));
+    crate::read::regular_file(path)?;
     let f = File::open(path).map_err(io)?;
     let bytes = f.metadata().map_err(io)?.len();
     let mut limits = Limits::default();

@@ -34,6 +34,7 @@ pub mod ascii;
 mod error;
 pub mod geotiff;
 mod raster;
+mod read;
 
 pub use error::DemError;
 pub use raster::{MAX_CELLS, Raster, Station};

@@ -80,22 +80,6 @@ impl Raster {
         Ok(Self { file: file.into(), cols, rows, cell, west, north, z, nodata })
     }
 
-    /// Reads a raster, choosing the format by the file's extension: `.asc` is an ESRI ASCII
-    /// grid, `.tif`/`.tiff` a GeoTIFF.
-    pub fn read(path: &std::path::Path) -> Result<Self, DemError> {
-        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        match ext.as_deref() {
-            Some("asc") => crate::ascii::read(path),
-            Some("tif" | "tiff") => crate::geotiff::read(path),
-            _ => Err(DemError::UnknownFormat { file: path.display().to_string() }),
-        }
-    }
-
-    /// Parses the text of an ESRI ASCII grid; `file` names it in errors.
-    pub fn parse_ascii(text: &str, file: &str) -> Result<Self, DemError> {
-        crate::ascii::parse(text, file, text.len() as u64)
-    }
-
     /// the file the raster came from.
     pub fn file(&self) -> &str {
         &self.file

@@ -88,14 +88,24 @@ fn header(payload: &[u8]) -> Vec<u8> {
 /// reads and verifies a checkpoint file (see the module docs).
 pub fn read(path: &Path) -> Result<CheckpointFile, OutputError> {
     let refuse = |reason: String| OutputError::Checkpoint { path: path.to_path_buf(), reason };
-    let size = std::fs::metadata(path)
-        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?
-        .len();
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.file_type().is_file() {
+        // a FIFO would block the open, a device such as /dev/zero never end
+        return Err(refuse("not a regular file (a directory, a FIFO or a device)".into()));
+    }
+    let size = meta.len();
     if size > MAX_FILE {
         return Err(refuse(format!("{size} bytes, above the {MAX_FILE}-byte limit")));
     }
-    let bytes = std::fs::read(path)
-        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?;
+    // at most the length it had when looked at: a file still growing is cut, and then refused
+    // by its checksum
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, size),
+        &mut bytes,
+    )
+    .map_err(io)?;
     let payload = verify(&bytes).map_err(refuse)?;
     let (c, used): (CheckpointFile, usize) = decode(payload)
         .map_err(|e| refuse(format!("the checksum holds but the content does not decode ({e})")))?;

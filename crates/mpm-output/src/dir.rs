@@ -80,14 +80,21 @@ impl DirLock {
                         Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
                         Err(_) => None,
                     };
+                    // a lock to take over: naming a process that is gone, or naming none (empty
+                    // or garbled) and older than a writer needs to fill it in
+                    let takeover = match holder {
+                        Some(other) if stale(other, &path) => true,
+                        None => abandoned(&path),
+                        Some(_) => false,
+                    };
                     match holder {
-                        Some(other) if stale(other, &path) => {
+                        other if takeover => {
                             let aside = dir.join(format!("{LOCK_FILE}.stale-{pid}"));
                             if std::fs::rename(&path, &aside).is_ok() {
                                 let moved = std::fs::read_to_string(&aside)
                                     .ok()
                                     .and_then(|t| t.trim().parse::<u32>().ok());
-                                if moved != Some(other) {
+                                if moved != other {
                                     // another process took the stale lock over first and this
                                     // moved its live one: put it back
                                     let _ = std::fs::rename(&aside, &path);
@@ -123,6 +130,18 @@ impl Drop for DirLock {
     }
 }
 
+/// A lock file that names no process is being written if it is younger than this (the
+/// exclusive-create fallback writes the id right after creating it), abandoned if older.
+const LOCK_WRITE_GRACE: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// whether a lock at `path` that names no process (empty or garbled: a crash between creating
+/// and writing it, a disk that filled, a user's `touch`) is older than [`LOCK_WRITE_GRACE`].
+fn abandoned(path: &Path) -> bool {
+    std::fs::metadata(path)
+        .and_then(|m| m.modified())
+        .is_ok_and(|t| t.elapsed().is_ok_and(|age| age > LOCK_WRITE_GRACE))
+}
+
 /// whether a lock at `path` naming process `pid` is stale: that process does not exist, or it
 /// is this process and this process does not hold the lock. Where `/proc` does not exist, every
 /// other process counts as alive (the message then tells the user how to remove a stale lock).
@@ -153,10 +172,18 @@ pub fn prepare_dir(dir: &Path, force: bool) -> Result<DirLock, OutputError> {
     if force {
         remove_run_files(dir);
     }
-    for d in [dir.join("frames"), dir.join("plots")] {
-        std::fs::create_dir_all(&d).map_err(io(&d))?;
-    }
+    layout(dir)?;
     Ok(lock)
+}
+
+/// creates the sub-directories a run writes into (`frames/`, `plots/`), also when a resumed
+/// run's were deleted.
+pub fn layout(dir: &Path) -> Result<(), OutputError> {
+    for d in [dir.join("frames"), dir.join("plots")] {
+        std::fs::create_dir_all(&d)
+            .map_err(|source| OutputError::Io { path: d.clone(), source })?;
+    }
+    Ok(())
 }
 
 /// removes what a run writes into `dir` (see [`RUN_FILES`]), leaving anything else.

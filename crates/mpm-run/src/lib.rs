@@ -46,8 +46,10 @@
 // range, fix); it is returned once, before any step, so its size costs nothing.
 #![allow(clippy::result_large_err)]
 
+mod driver;
 mod element;
 mod error;
+mod options;
 mod progress;
 mod run;
 

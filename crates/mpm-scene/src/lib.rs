@@ -37,6 +37,7 @@ pub mod dispatch;
 pub mod envelope;
 mod error;
 pub mod file;
+mod ground;
 pub mod limits;
 pub mod materials;
 pub mod observed;
@@ -49,10 +50,11 @@ mod validate;
 
 pub use dispatch::{Job, SavedState, SceneModel, dispatch};
 pub use error::SceneError;
+pub use ground::{ground_height, segment_at, surface};
 pub use scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION,
     GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
-    ResolvedOutput, Scene, Seed, StopAtRest, fnv1a, ground_height, segment_at,
+    ResolvedOutput, Scene, Seed, StopAtRest, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{
@@ -78,6 +80,14 @@ pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
         fix: fix.into(),
     };
     let limit = limits::MAX_SCENE_BYTES;
+    if std::fs::metadata(path).is_ok_and(|m| !m.file_type().is_file()) {
+        // a FIFO would block the open for ever, a device never end
+        return Err(refuse(
+            "not a regular file (a directory, a FIFO or a device)".into(),
+            "a TOML scene file",
+            "give the path of the scene file",
+        ));
+    }
     let mut bytes = Vec::new();
     std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(
         |e| {

@@ -249,3 +249,53 @@ fn a_polygon_closed_by_repeating_its_first_vertex_is_accepted() {
     // the same 64 particles as the 1 m × 1 m rectangle
     assert_eq!(scene.particle_count(), 64);
 }
+
+/// What is not a regular file is refused before it is opened (a FIFO would block the open for
+/// ever, `/dev/zero` would be read for ever): a directory or a device as the scene, a device
+/// as a checkpoint, a DEM or a CSV polyline.
+#[cfg(unix)]
+#[test]
+fn devices_and_directories_are_refused_not_read() {
+    let dir = temp_dir("devices");
+    std::fs::create_dir_all(&dir).unwrap();
+    for scene in [dir.as_path(), Path::new("/dev/zero")] {
+        let e = mpm_run::load_scene_file(scene).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{}: {e}", scene.display());
+    }
+    // a run's folder whose checkpoint is /dev/zero
+    let run = dir.join("run");
+    let text = free_fall(|t| t.replace("end_time = 1.0", "end_time = 0.02"));
+    let scene = load_scene_str(&text, "free_fall").unwrap();
+    run_scene(&scene, &RunOptions { stop_after: Some(0.01), ..opts(&run) }).unwrap();
+    std::fs::remove_file(run.join(CHECKPOINT_FILE)).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", run.join(CHECKPOINT_FILE)).unwrap();
+    let e = resume(&run, &RunOptions::default()).unwrap_err();
+    assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{e}");
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+    // DEMs and a CSV polyline that are devices, under their formats' names
+    for name in ["zero.asc", "zero.tif", "zero.csv"] {
+        std::os::unix::fs::symlink("/dev/zero", dir.join(name)).unwrap();
+    }
+    let at = |name: &str| dir.join(name).display().to_string();
+    for (field, value) in [
+        (
+            "profile",
+            format!("{{ dem = \"{}\", from = [0.0, 0.0], to = [10.0, 0.0] }}", at("zero.asc")),
+        ),
+        (
+            "profile",
+            format!("{{ dem = \"{}\", from = [0.0, 0.0], to = [10.0, 0.0] }}", at("zero.tif")),
+        ),
+        ("profile", format!("{{ csv = \"{}\" }}", at("zero.csv"))),
+    ] {
+        let text = format!(
+            "[grid]\nkind = \"terrain\"\ncell_width = 1.0\nrow_height = 1.0\nrows = 4\n{field} = {value}\n\
+             [materials.m]\nkind = \"elastic\"\nyoung = 1e6\npoisson = 0.3\ndensity = 1000.0\n\
+             [[bodies]]\nmaterial = \"m\"\nshape = \"rectangle\"\nmin = [1.0, 0.0]\nmax = [2.0, 1.0]\n\
+             [solver]\nend_time = 0.1\n"
+        );
+        let e = load_scene_str(&text, "device.toml").unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{value}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -552,3 +552,53 @@ fn a_collapsing_column_is_bit_identical_with_one_two_and_three_threads() {
     assert_eq!(hashes[0], hashes[1], "1 against 2 threads");
     assert_eq!(hashes[0], hashes[2], "1 against 3 threads");
 }
+
+/// A stopped run's folder survives what users do to it: an empty lock left by a crash (older
+/// than a writer needs) is stale, not "process 0"; a fresh empty one still holds the folder
+/// (a run may be writing its id into it); deleted `frames/`, `plots/` and `scene.toml` are
+/// written again; and the resumed files are those of the uninterrupted run.
+#[test]
+fn a_resume_survives_an_empty_lock_and_deleted_folders() {
+    let scene = short("free_fall", 0.04);
+    let straight = temp_dir("survives-straight");
+    run_scene(&scene, &opts(&straight)).unwrap();
+    let dir = temp_dir("survives");
+    run_scene(&scene, &RunOptions { stop_after: Some(0.02), ..opts(&dir) }).unwrap();
+    let lock = dir.join(".mpm.lock");
+    std::fs::write(&lock, "").unwrap();
+    let e = resume(&dir, &RunOptions::default()).unwrap_err();
+    assert!(matches!(e, RunError::Output(OutputError::Locked { .. })), "a fresh empty lock: {e}");
+    let old = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+    std::fs::File::options().write(true).open(&lock).unwrap().set_modified(old).unwrap();
+    std::fs::remove_dir_all(dir.join("frames")).unwrap();
+    std::fs::remove_dir_all(dir.join("plots")).unwrap();
+    std::fs::remove_file(dir.join("scene.toml")).unwrap();
+    let s = resume(&dir, &RunOptions::default()).unwrap();
+    assert_eq!(s.status, RunStatus::Completed);
+    assert!(!lock.exists(), "the stale lock is gone with the run");
+    let straight_scene = std::fs::read(straight.join("scene.toml")).unwrap();
+    assert_eq!(std::fs::read(dir.join("scene.toml")).unwrap(), straight_scene);
+    let last = |d: &Path| std::fs::read(d.join("energy.csv")).unwrap();
+    assert_eq!(last(&dir), last(&straight));
+    assert!(dir.join("frames").read_dir().unwrap().count() > 0);
+    std::fs::remove_dir_all(&straight).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A checkpoint copied in from another scene's run is refused (exit code 2's error), and the
+/// folder keeps its own files: resuming it would continue the other run here.
+#[test]
+fn a_checkpoint_from_another_scene_is_refused() {
+    let (a, b) = (temp_dir("foreign-a"), temp_dir("foreign-b"));
+    run_scene(&short("free_fall", 0.04), &RunOptions { stop_after: Some(0.01), ..opts(&a) })
+        .unwrap();
+    run_scene(&short("flume", 0.04), &RunOptions { stop_after: Some(0.01), ..opts(&b) }).unwrap();
+    let scene_b = std::fs::read(b.join("scene.toml")).unwrap();
+    std::fs::copy(a.join(CHECKPOINT_FILE), b.join(CHECKPOINT_FILE)).unwrap();
+    let e = resume(&b, &RunOptions::default()).unwrap_err();
+    assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{e}");
+    assert!(e.to_string().contains("another scene"), "{e}");
+    assert_eq!(std::fs::read(b.join("scene.toml")).unwrap(), scene_b);
+    std::fs::remove_dir_all(&a).unwrap();
+    std::fs::remove_dir_all(&b).unwrap();
+}

@@ -213,6 +213,13 @@ pub(super) fn read_pairs(
     use std::io::Read;
     let name = file.display().to_string();
     let fail = |problem: String, fix: &str| ctx.err(field, None, problem, "", fix);
+    if std::fs::metadata(file).is_ok_and(|m| !m.file_type().is_file()) {
+        // a FIFO would block the open for ever
+        return Err(fail(
+            format!("{name}: not a regular file (a directory, a FIFO or a device)"),
+            "give the path of the CSV file",
+        ));
+    }
     let mut text = String::new();
     std::fs::File::open(file)
         .and_then(|f| f.take(MAX_CSV_BYTES + 1).read_to_string(&mut text))

@@ -1,0 +1,42 @@
+//! A raster from a file, the format chosen by its extension. Kept apart from [`Raster`]'s own
+//! module so that the formats depend on the raster and the raster on no format.
+
+use std::path::Path;
+
+use crate::error::DemError;
+use crate::raster::Raster;
+use crate::{ascii, geotiff};
+
+/// refuses what is not a regular file before it is opened: a FIFO would block the open for
+/// ever, a device such as `/dev/zero` would never end.
+pub(crate) fn regular_file(path: &Path) -> Result<u64, DemError> {
+    let file = || path.display().to_string();
+    let meta = std::fs::metadata(path).map_err(|source| DemError::Io { file: file(), source })?;
+    if !meta.file_type().is_file() {
+        return Err(DemError::Io {
+            file: file(),
+            source: std::io::Error::other(
+                "not a regular file (a directory, a FIFO or a device): give the raster's file",
+            ),
+        });
+    }
+    Ok(meta.len())
+}
+
+impl Raster {
+    /// Reads a raster, choosing the format by the file's extension: `.asc` is an ESRI ASCII
+    /// grid, `.tif`/`.tiff` a GeoTIFF.
+    pub fn read(path: &Path) -> Result<Self, DemError> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("asc") => ascii::read(path),
+            Some("tif" | "tiff") => geotiff::read(path),
+            _ => Err(DemError::UnknownFormat { file: path.display().to_string() }),
+        }
+    }
+
+    /// Parses the text of an ESRI ASCII grid; `file` names it in errors.
+    pub fn parse_ascii(text: &str, file: &str) -> Result<Self, DemError> {
+        ascii::parse(text, file, text.len() as u64)
+    }
+}

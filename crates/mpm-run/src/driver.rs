@@ -1,0 +1,659 @@
+//! The run's observer: after each step it records the time series, frames, envelopes and
+//! checkpoints a scene asks for, watches for rest, alarms, limits and interrupts, and at the end
+//! writes the final files and the summary.
+
+use std::ops::ControlFlow;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use mpm_grid::ShapeFunctions;
+use mpm_scene::dispatch::SceneModel;
+use mpm_scene::envelope::{self, Envelope};
+use mpm_scene::observed;
+use mpm_scene::summary::{
+    self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
+};
+use mpm_scene::{InitialState, InitialStateSummary, Resolved, Scene, ground_height};
+use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, SolverError, StepReport, Vector};
+
+use mpm_output::checkpoint::{self, CheckpointFile, History};
+use mpm_output::csv::{self, EnergyRow, ProbeRow};
+use mpm_output::report::{self, Deposit};
+use mpm_output::{OutputError, atomic, vtk};
+
+use crate::error::RunError;
+use crate::options::RunOptions;
+use crate::progress::ProgressSink;
+
+/// the summary's message for a tripped energy alarm (`None` if it did not trip).
+fn alarm_message(h: &History, threshold: f64) -> Option<String> {
+    let t = h.alarm_time?;
+    let worst = h.energy_check.unwrap_or_default();
+    Some(format!(
+        "energy alarm: at t = {t:.4} s the energy residual exceeded {:.1} % of the run's energy \
+         scale (`[solver] energy_alarm`); the worst was {:+.1} % at t = {:.4} s. The results are \
+         suspect: check the time step, the material's stiffness and the contact settings",
+        100.0 * threshold,
+        100.0 * worst.worst,
+        worst.worst_time
+    ))
+}
+
+pub(crate) struct Driver<'a> {
+    /// what the initial-state stage did (a new run with `[initial_state]`).
+    pub(crate) initial: Option<InitialStateSummary>,
+    pub(crate) scene: &'a Scene,
+    pub(crate) dir: Option<&'a Path>,
+    pub(crate) history: History,
+    flushed: Flushed,
+    pub(crate) progress: ProgressSink,
+    pub(crate) interrupt: Option<Arc<AtomicBool>>,
+    pub(crate) stop_after: Option<f64>,
+    pub(crate) io_error: Option<RunError>,
+    /// why the driver stopped the run, when not on request.
+    stop: Option<Stop>,
+    /// the kinetic energy's course for `stop_at_rest`, kept as the rows come.
+    rest: RestWatch,
+}
+
+/// The peak of the kinetic energy over the series rows so far, and the time of the first row of
+/// the trailing run of rows at or below `fraction` of it (`None` when the last row is above).
+/// Updated row by row; rebuilt from the rows on resume, so a resumed run decides as the
+/// uninterrupted one does.
+#[derive(Clone, Copy, Debug, Default)]
+struct RestWatch {
+    peak: f64,
+    since: Option<f64>,
+}
+
+impl RestWatch {
+    /// the watch after the rows of a history.
+    fn over(rows: &[EnergyRow], fraction: f64) -> Self {
+        let mut w = Self::default();
+        for r in rows {
+            w.push(r.time, r.ledger.kinetic, fraction);
+        }
+        w
+    }
+
+    /// takes one row. A rise to a new peak ends any rest; a run that has not moved (zero
+    /// peak) is not at rest: it has not started.
+    fn push(&mut self, time: f64, kinetic: f64, fraction: f64) {
+        self.peak = self.peak.max(kinetic);
+        if self.peak > 0.0 && kinetic <= fraction * self.peak {
+            self.since.get_or_insert(time);
+        } else {
+            self.since = None;
+        }
+    }
+
+    /// whether the kinetic energy has stayed at or below the fraction for `duration` up to `now`.
+    fn at_rest(&self, now: f64, duration: f64) -> bool {
+        self.since.is_some_and(|t| now - t >= duration)
+    }
+}
+
+/// finds a new run's initial stresses as the scene asks (`[initial_state]`), timed and reported
+/// to `progress`; `Ok(None)` for a stress-free start.
+pub(crate) fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    solver: &mut Solver<M, S, N>,
+    how: &InitialState,
+    progress: &ProgressSink,
+) -> Result<Option<InitialStateSummary>, SolverError> {
+    let start = Instant::now();
+    let summary = match *how {
+        InitialState::None => return Ok(None),
+        InitialState::Implicit(settings) => {
+            let g = solver.solve_geostatic(&settings)?;
+            InitialStateSummary {
+                method: "implicit".into(),
+                load_steps: Some(g.load_steps),
+                iterations: Some(g.iterations),
+                residual: Some(g.residual),
+                residual_history: g.history.iter().map(|h| h.residual).collect(),
+                plastic_particles: Some(g.plastic_particles),
+                tied_nodes: Some(g.tied_nodes),
+                released_planes: Some(g.released_planes),
+                max_displacement: Some(g.max_displacement),
+                base_friction_ratio: Some(g.base_friction_ratio),
+                ..InitialStateSummary::default()
+            }
+        }
+        InitialState::GravityRamp { ramp, hold } => {
+            let r = solver.settle(ramp, hold)?;
+            InitialStateSummary {
+                method: "gravity_ramp".into(),
+                steps: Some(r.steps),
+                kinetic_energy: Some(r.kinetic_energy),
+                ..InitialStateSummary::default()
+            }
+        }
+    };
+    let summary = InitialStateSummary { wall_time_s: start.elapsed().as_secs_f64(), ..summary };
+    {
+        let s = &summary;
+        progress.note(&match s.method.as_str() {
+            "implicit" => format!(
+                "initial state (implicit): {} load step(s), {} Newton iterations, residual \
+                 {:.2e}, {} particles plastic, {} surface nodes tied, largest displacement \
+                 {:.3e} m, {:.2} s",
+                s.load_steps.unwrap_or(0),
+                s.iterations.unwrap_or(0),
+                s.residual.unwrap_or(0.0),
+                s.plastic_particles.unwrap_or(0),
+                s.tied_nodes.unwrap_or(0),
+                s.max_displacement.unwrap_or(0.0),
+                s.wall_time_s
+            ),
+            _ => format!(
+                "initial state (gravity ramp): {} steps, kinetic energy left {:.3e} J/m \
+                 (dropped), {:.2} s",
+                s.steps.unwrap_or(0),
+                s.kinetic_energy.unwrap_or(0.0),
+                s.wall_time_s
+            ),
+        });
+    }
+    Ok(Some(summary))
+}
+
+/// takes the solver's current state into the envelopes.
+fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    e: &mut Envelope,
+    r: &Resolved,
+    solver: &Solver<M, S, N>,
+) {
+    let p = solver.particles();
+    e.observe(solver.time(), r.spacing, [&p.position, &p.velocity], [&p.mass, &p.volume]);
+}
+
+/// Why the driver stopped a run before its end time (other than an interrupt).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stop {
+    /// the energy alarm tripped with `energy_alarm_stop = true`.
+    EnergyAlarm,
+    /// `max_steps` was reached.
+    StepLimit,
+    /// `stop_at_rest`: the material has come to rest.
+    AtRest,
+}
+
+/// Rows of each series this session has on disk.
+#[derive(Clone, Copy, Debug, Default)]
+struct Flushed {
+    energy: usize,
+    probes: usize,
+    runout: usize,
+}
+
+/// A slot time counts as reached when the clock is within this fraction of the interval of it
+/// (round-off of summed steps, never a physical time difference).
+const SLOT_SLACK: f64 = 1e-9;
+
+/// index of the last slot k·interval reached at time t.
+fn slot(t: f64, interval: f64) -> u64 {
+    (t / interval + SLOT_SLACK).floor().max(0.0) as u64
+}
+
+impl Driver<'_> {
+    pub(crate) fn metrics<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> RunoutMetrics {
+        let r = self.scene.resolved();
+        let p = solver.particles();
+        let column = r.grid.column_width();
+        summary::runout(
+            solver.time(),
+            [&p.position, &p.velocity],
+            &p.mass,
+            &r.ground,
+            r.spacing,
+            column,
+            self.history.initial.as_ref(),
+        )
+    }
+
+    pub(crate) fn record_series<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) {
+        let r = self.scene.resolved();
+        let t = solver.time();
+        let ledger = solver.energy();
+        if let Some(check) = &mut self.history.energy_check {
+            let relative = check.observe(t, &ledger);
+            if self.history.alarm_time.is_none() && relative.abs() > r.alarm.threshold {
+                self.history.alarm_time = Some(t);
+                self.progress.warn(&format!(
+                    "energy alarm at t = {t:.4} s: |energy residual| is {:.1} % of the energy \
+                     scale (threshold {:.1} %)",
+                    100.0 * relative.abs(),
+                    100.0 * r.alarm.threshold
+                ));
+                if r.alarm.stop {
+                    self.stop = Some(Stop::EnergyAlarm);
+                }
+            }
+        }
+        self.history.energy.push(EnergyRow {
+            time: t,
+            step: solver.step_count(),
+            dt: solver.last_report().dt,
+            ledger,
+        });
+        if let Some(rest) = r.stop_at_rest {
+            self.rest.push(t, ledger.kinetic, rest.kinetic_fraction);
+            if self.rest.at_rest(t, rest.duration) {
+                self.stop.get_or_insert(Stop::AtRest);
+            }
+        }
+        let p = solver.particles();
+        let direction = r.output.reference.map_or(Vector::X, |rf| rf.direction);
+        for (k, &i) in r.output.probes.iter().enumerate() {
+            let Some(&x) = p.position.get(i) else { continue };
+            let u = x - p.initial_position[i];
+            let v = p.velocity[i];
+            self.history.probes.push(ProbeRow {
+                time: t,
+                probe: k,
+                particle: i,
+                position: [x.x, x.y],
+                displacement: [u.x, u.y],
+                velocity: [v.x, v.y],
+                along: u.dot(direction),
+                reference: r.output.reference.map(|rf| rf.displacement(t)),
+            });
+        }
+        let m = self.metrics(solver);
+        self.history.runout.push(m);
+    }
+
+    pub(crate) fn write_frame<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let r = self.scene.resolved();
+        let Some(dir) = self.dir else { return Ok(()) };
+        if !r.output.vtk {
+            return Ok(());
+        }
+        let clock = Instant::now();
+        let name = format!("frames/particles_{:06}.vtp", self.history.frames.len());
+        let path = dir.join(&name);
+        let frame = vtk::frame(
+            solver.particles(),
+            solver.materials(),
+            &r.output.fields,
+            r.output.vtk_format,
+            solver.time(),
+        )
+        .map_err(|source| RunError::from(OutputError::Io { path: path.clone(), source }))?;
+        atomic::write_parts(&path, &frame.parts())?;
+        self.history.frames.push((solver.time(), name));
+        // The collection is small (a line per frame): rewritten whole, atomically.
+        atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())?;
+        self.history.output_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// rewrites the files a killed or stopped session may have written past its checkpoint
+    /// (rows, a torn last line, frames in the collection) from the history, before a resumed
+    /// run continues them.
+    pub(crate) fn rewrite_outputs(&mut self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        self.flushed = Flushed::default();
+        self.flush_series()?;
+        if self.scene.resolved().output.vtk {
+            atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.history.frames).as_bytes())?;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn flush_series(&mut self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        let clock = Instant::now();
+        let (h, f) = (&self.history, &mut self.flushed);
+        csv::flush(
+            &dir.join("energy.csv"),
+            csv::ENERGY_HEADER,
+            &h.energy,
+            &mut f.energy,
+            csv::energy,
+        )?;
+        csv::flush(
+            &dir.join("runout.csv"),
+            csv::RUNOUT_HEADER,
+            &h.runout,
+            &mut f.runout,
+            csv::runout,
+        )?;
+        if !self.scene.resolved().output.probes.is_empty() {
+            csv::flush(
+                &dir.join("probes.csv"),
+                csv::PROBES_HEADER,
+                &h.probes,
+                &mut f.probes,
+                csv::probes,
+            )?;
+        }
+        self.history.output_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    pub(crate) fn write_checkpoint<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        let file = CheckpointFile {
+            format: checkpoint::FORMAT,
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            origin: self.scene.origin().to_string(),
+            scene_text: self.scene.text().to_string(),
+            state: M::wrap(solver.checkpoint()),
+            history: self.history.clone(),
+        };
+        Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
+    }
+
+    pub(crate) fn summary<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+        status: RunStatus,
+        error: Option<String>,
+        threads: usize,
+    ) -> RunSummary {
+        let r = self.scene.resolved();
+        let h = &self.history;
+        let steps = solver.step_count();
+        RunSummary {
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene_origin: self.scene.origin().to_string(),
+            scene_hash: self.scene.hash(),
+            status,
+            error,
+            particles: solver.particles().len(),
+            scheme: r.config.scheme.name().to_string(),
+            shape_function: r.shape_function.name().to_string(),
+            steps,
+            simulated_time: solver.time(),
+            end_time: r.end_time,
+            dt: DtStats {
+                min: if h.dt_min.is_finite() { h.dt_min } else { 0.0 },
+                max: h.dt_max,
+                mean: if steps > 0 { solver.time() / steps as f64 } else { 0.0 },
+                first: h.dt_first,
+            },
+            wall_time_s: h.wall_time,
+            particle_steps_per_s: if h.wall_time > 0.0 {
+                h.particle_steps / h.wall_time
+            } else {
+                0.0
+            },
+            output_time_s: h.output_time,
+            threads,
+            energy: solver.energy(),
+            energy_check: {
+                let mut c = h.energy_check.unwrap_or_default();
+                EnergyReport {
+                    relative_residual: c.observe(solver.time(), &solver.energy()),
+                    worst_relative_residual: c.worst,
+                    worst_time: c.worst_time,
+                    alarm_threshold: r.alarm.threshold,
+                    alarm_time: h.alarm_time,
+                }
+            },
+            runout: RunoutReport {
+                last: h.runout.last().copied().unwrap_or_default(),
+                indicators: {
+                    let p = solver.particles();
+                    // the source's top: the highest initial particle's top
+                    let crown = p
+                        .initial_position
+                        .iter()
+                        .copied()
+                        .max_by(|a, b| a.y.total_cmp(&b.y))
+                        .map_or(Vector::ZERO, |c| c + Vector::new(0.0, 0.5 * r.spacing));
+                    let kinetic: Vec<(f64, f64)> =
+                        h.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
+                    summary::indicators(&h.runout, &kinetic, crown, &r.ground)
+                },
+            },
+            observed: r.output.observed.as_ref().and_then(|o| {
+                let p = solver.particles();
+                let sim =
+                    observed::simulated(&r.ground, r.grid.column_width(), r.spacing, &p.position);
+                let last = h.runout.last()?;
+                observed::compare(o, &sim, last.front_x, last.tail_x)
+            }),
+            state_hash: checkpoint::state_hash(&solver.checkpoint()),
+            initial_state: self.initial.clone(),
+        }
+    }
+
+    /// `envelope.csv`, `deposit.csv` and `plots/envelope.png`, when the scene asks for them.
+    pub(crate) fn envelope_files<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let (Some(dir), Some(e)) = (self.dir, &self.history.envelope) else { return Ok(()) };
+        let r = self.scene.resolved();
+        let deposit = envelope::deposit(e, r.spacing, &solver.particles().position);
+        let mut s = csv::ENVELOPE_HEADER.to_string();
+        csv::envelope(&mut s, e);
+        atomic::write(&dir.join("envelope.csv"), s.as_bytes())?;
+        let mut s = csv::DEPOSIT_HEADER.to_string();
+        csv::deposit(&mut s, &deposit);
+        atomic::write(&dir.join("deposit.csv"), s.as_bytes())?;
+        if r.output.plots {
+            report::envelope(&dir.join("plots"), e, &deposit)?;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn plots<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        if !self.scene.resolved().output.plots {
+            return Ok(());
+        }
+        let p = solver.particles();
+        let deposit =
+            Deposit { positions: &p.position, initial: &p.initial_position, time: solver.time() };
+        Ok(report::plots(&dir.join("plots"), self.scene, &self.history, &deposit)?)
+    }
+}
+
+impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for Driver<'_> {
+    fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
+        let r = self.scene.resolved();
+        let h = &mut self.history;
+        // The step that lands on the end time is shortened; it does not count as the smallest.
+        if !mpm_solver::reached(report.time, r.end_time) || h.dt_max == 0.0 {
+            h.dt_min = h.dt_min.min(report.dt);
+        }
+        h.dt_max = h.dt_max.max(report.dt);
+        if h.dt_first == 0.0 {
+            h.dt_first = report.dt;
+        }
+        if let Some(e) = &mut h.envelope {
+            observe(e, r, solver);
+        }
+        let t = report.time;
+        let series = slot(t, r.output.series_interval);
+        let frame = slot(t, r.output.interval);
+        if series > self.history.series_slot {
+            self.history.series_slot = series;
+            self.record_series(solver);
+        }
+        if frame > self.history.frame_slot {
+            self.history.frame_slot = frame;
+            if let Err(e) = self.write_frame(solver).and_then(|()| self.flush_series()) {
+                self.io_error = Some(e);
+                return ControlFlow::Break(());
+            }
+        }
+        if let Some(every) = r.output.checkpoint_interval {
+            let c = slot(t, every);
+            if c > self.history.checkpoint_slot {
+                self.history.checkpoint_slot = c;
+                if let Err(e) = self.write_checkpoint(solver) {
+                    self.io_error = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
+        }
+        self.progress.update(t, report.step);
+        if report.step >= r.max_steps && !mpm_solver::reached(t, r.end_time) {
+            self.stop.get_or_insert(Stop::StepLimit);
+        }
+        let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
+        if interrupted {
+            self.progress
+                .warn("interrupted: writing a checkpoint after this step (a second signal aborts)");
+        }
+        if self.stop.is_some() || interrupted || self.stop_after.is_some_and(|s| t >= s) {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+impl<'a> Driver<'a> {
+    /// the driver of a run of `scene` writing into `dir`, continuing `history` (empty for a new
+    /// run; a new run's `stop_at_rest` watch starts empty, a resumed one's from its rows).
+    pub(crate) fn begin(
+        scene: &'a Scene,
+        dir: Option<&'a Path>,
+        history: History,
+        initial: Option<InitialStateSummary>,
+        opts: &RunOptions,
+    ) -> Self {
+        let rest = match scene.resolved().stop_at_rest {
+            Some(rest) => RestWatch::over(&history.energy, rest.kinetic_fraction),
+            None => RestWatch::default(),
+        };
+        Driver {
+            initial,
+            scene,
+            dir,
+            history,
+            flushed: Flushed::default(),
+            progress: opts.progress.clone(),
+            interrupt: opts.interrupt.clone(),
+            stop_after: opts.stop_after,
+            io_error: None,
+            stop: None,
+            rest,
+        }
+    }
+
+    /// a new run's first records: the envelopes, the initial runout measures, the energy check's
+    /// scale, the first series row and frame.
+    pub(crate) fn record_start<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let r = self.scene.resolved();
+        if r.output.envelope {
+            let column = r.grid.column_width();
+            let mut e = Envelope::new(&r.ground, column);
+            observe(&mut e, r, solver);
+            self.history.envelope = Some(e);
+        }
+        let m0 = self.metrics(solver);
+        self.history.initial = Some(m0);
+        let p = solver.particles();
+        self.history.energy_check = Some(EnergyCheck::new(
+            &solver.energy(),
+            &p.position,
+            &p.mass,
+            r.config.gravity.length(),
+            |x| ground_height(&r.ground, x),
+        ));
+        self.record_series(solver);
+        self.write_frame(solver)?;
+        self.flush_series()
+    }
+
+    /// how the run ended, and its message: from the solver's result and why the driver stopped
+    /// it (an error's message through `describe`).
+    pub(crate) fn status<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        result: &Result<RunEnd, SolverError>,
+        solver: &Solver<M, S, N>,
+        describe: &dyn Fn(&SolverError) -> String,
+    ) -> (RunStatus, Option<String>) {
+        let r = self.scene.resolved();
+        match (result, self.stop) {
+            (Err(e), _) => (RunStatus::Failed, Some(describe(e))),
+            (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
+                RunStatus::StepLimit,
+                Some(format!(
+                    "step limit: {} steps reached at t = {:.6e} s before end_time = {} s (Δt \
+                     {:.3e} s); no checkpoint is written: if the run is sound, run the scene \
+                     again with a higher `[solver] max_steps`",
+                    solver.step_count(),
+                    solver.time(),
+                    r.end_time,
+                    solver.last_report().dt
+                )),
+            ),
+            (Ok(RunEnd::Stopped), Some(Stop::AtRest)) => (RunStatus::AtRest, None),
+            (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
+                (RunStatus::EnergyAlarm, alarm_message(&self.history, r.alarm.threshold))
+            }
+            (Ok(RunEnd::Stopped), None) => (RunStatus::Interrupted, None),
+            // (judged in `finish`, once the final row is in)
+            (Ok(RunEnd::EndTime), _) => (RunStatus::Completed, None),
+        }
+    }
+
+    /// ends the run's files: the checkpoint of an interrupted run, the final series row and
+    /// frame, the energy alarm judged on the last state too, the envelopes, plots and
+    /// `summary.json`; returns the summary.
+    pub(crate) fn finish<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+        status: RunStatus,
+        error: Option<String>,
+        threads: usize,
+    ) -> Result<RunSummary, RunError> {
+        let r = self.scene.resolved();
+        // The checkpoint holds the history as an uninterrupted run has it at this step (the
+        // extra row and frame of the stop below are not part of it).
+        if status == RunStatus::Interrupted {
+            self.write_checkpoint(solver)?;
+        }
+        // the final state: a last series row and frame unless this very step was recorded.
+        let t = solver.time();
+        if self.history.energy.last().is_none_or(|row| row.time < t) {
+            self.record_series(solver);
+        }
+        if self.history.frames.last().is_none_or(|f| f.0 < t) {
+            self.write_frame(solver)?;
+        }
+        // The final row may trip the alarm: a run is judged on its last state too.
+        let (status, error) = match status {
+            RunStatus::Completed | RunStatus::AtRest if self.history.alarm_time.is_some() => {
+                (RunStatus::EnergyAlarm, alarm_message(&self.history, r.alarm.threshold))
+            }
+            _ => (status, error),
+        };
+        self.flush_series()?;
+        let summary = self.summary(solver, status, error, threads);
+        if let Some(dir) = self.dir {
+            self.envelope_files(solver)?;
+            self.plots(solver)?;
+            let json = serde_json::to_string_pretty(&summary)
+                .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
+            atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+        }
+        Ok(summary)
+    }
+}
