@@ -195,82 +195,8 @@ fn main() -> ExitCode {
         Command::Section { dem, from, to, spacing, out, force } => {
             section(&dem, from, to, spacing, out.as_deref(), force)
         }
-        Command::Check { scene } => {
-            let scene = match load(&scene) {
-                Ok(s) => s,
-                Err(e) => return scene_failure(&e),
-            };
-            match mpm_run::check_scene(&scene) {
-                Ok(r) => {
-                    let c = scene.solver_config();
-                    println!("{}: valid", scene.origin());
-                    println!("  particles:        {}", r.particles);
-                    println!(
-                        "  grid:             {} × {} cells, {} active nodes at t = 0",
-                        r.cells[0], r.cells[1], r.active_nodes
-                    );
-                    println!(
-                        "  scheme:           {}, {} shape functions, time step {:?}",
-                        c.scheme.name(),
-                        scene.shape_function().name(),
-                        c.time_step
-                    );
-                    println!("  initial Δt:       {:.4e} s", r.initial_dt);
-                    println!(
-                        "  steps:            {} or more to t = {} s (Δt shrinks as the material speeds up or dilates)",
-                        r.estimated_steps,
-                        scene.end_time()
-                    );
-                    println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
-                    println!(
-                        "  frames:           {} (about {:.1} MB on disk)",
-                        r.frames,
-                        r.frame_bytes as f64 / 1e6
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => run_failure(&e),
-            }
-        }
-        Command::Scenes { write, path, force } => match write {
-            None => {
-                for (name, text) in SCENES {
-                    let title = mpm_run::title_of(text).unwrap_or_default();
-                    let default = if name == DEFAULT_SCENE { " (default)" } else { "" };
-                    println!("{name:<20} {title}{default}");
-                }
-                println!("(the element tests run with `mpm element-test uniaxial|simple-shear`)");
-                ExitCode::SUCCESS
-            }
-            Some(name) => {
-                let Some(text) = mpm_run::embedded_scene(&name) else {
-                    let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
-                    eprintln!(
-                        "error: no embedded scene `{name}`; choose one of {}",
-                        names.join(", ")
-                    );
-                    return ExitCode::from(2);
-                };
-                let path = path.unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
-                if path.exists() && !force {
-                    eprintln!(
-                        "error: {} exists; choose another path or pass --force",
-                        path.display()
-                    );
-                    return ExitCode::from(1);
-                }
-                match std::fs::write(&path, text) {
-                    Ok(()) => {
-                        println!("wrote {}", path.display());
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        eprintln!("error: {}: {e}", path.display());
-                        ExitCode::from(1)
-                    }
-                }
-            }
-        },
+        Command::Check { scene } => check(&scene),
+        Command::Scenes { write, path, force } => scenes(write, path, force),
         Command::ElementTest {
             test,
             young,
@@ -323,6 +249,82 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => run_failure(&e),
+            }
+        }
+    }
+}
+
+/// `mpm check SCENE`: validates and prints what a run would do.
+fn check(scene: &str) -> ExitCode {
+    let scene = match load(scene) {
+        Ok(s) => s,
+        Err(e) => return scene_failure(&e),
+    };
+    match mpm_run::check_scene(&scene) {
+        Ok(r) => {
+            let c = scene.solver_config();
+            println!("{}: valid", scene.origin());
+            println!("  particles:        {}", r.particles);
+            println!(
+                "  grid:             {} × {} cells, {} active nodes at t = 0",
+                r.cells[0], r.cells[1], r.active_nodes
+            );
+            println!(
+                "  scheme:           {}, {} shape functions, time step {:?}",
+                c.scheme.name(),
+                scene.shape_function().name(),
+                c.time_step
+            );
+            println!("  initial Δt:       {:.4e} s", r.initial_dt);
+            println!(
+                "  steps:            {} or more to t = {} s (Δt shrinks as the material speeds up or dilates)",
+                r.estimated_steps,
+                scene.end_time()
+            );
+            println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
+            println!(
+                "  frames:           {} (about {:.1} MB on disk)",
+                r.frames,
+                r.frame_bytes as f64 / 1e6
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => run_failure(&e),
+    }
+}
+
+/// `mpm scenes [--write NAME [PATH]]`: lists the embedded scenes or writes one out.
+fn scenes(write: Option<String>, path: Option<PathBuf>, force: bool) -> ExitCode {
+    match write {
+        None => {
+            for (name, text) in SCENES {
+                let title = mpm_run::title_of(text).unwrap_or_default();
+                let default = if name == DEFAULT_SCENE { " (default)" } else { "" };
+                println!("{name:<20} {title}{default}");
+            }
+            println!("(the element tests run with `mpm element-test uniaxial|simple-shear`)");
+            ExitCode::SUCCESS
+        }
+        Some(name) => {
+            let Some(text) = mpm_run::embedded_scene(&name) else {
+                let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
+                eprintln!("error: no embedded scene `{name}`; choose one of {}", names.join(", "));
+                return ExitCode::from(2);
+            };
+            let path = path.unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
+            if path.exists() && !force {
+                eprintln!("error: {} exists; choose another path or pass --force", path.display());
+                return ExitCode::from(1);
+            }
+            match std::fs::write(&path, text) {
+                Ok(()) => {
+                    println!("wrote {}", path.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {}: {e}", path.display());
+                    ExitCode::from(1)
+                }
             }
         }
     }

@@ -19,7 +19,7 @@
 use mpm_solver::Vector;
 use serde::{Deserialize, Serialize};
 
-use crate::scene::{ground_height, segment_at};
+use crate::ground::{ground_height, segment_at};
 
 /// One station's maxima over the observations so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -74,7 +74,7 @@ pub struct DepositComparison {
 /// The simulated deposit's vertical thickness at the envelopes' stations (columns of width
 /// `column` from the ground's first x, [`crate::envelope::Envelope::new`]): (station centre x,
 /// thickness), the free surface's height above the ground there
-/// ([`crate::summary::surface`]: the top of the column's highest particle, centre plus half
+/// ([`crate::surface`]: the top of the column's highest particle, centre plus half
 /// `spacing`, above the ground under that particle), zero for an empty column.
 pub fn simulated(
     ground: &[Vector],
@@ -85,7 +85,7 @@ pub fn simulated(
     // the envelopes' stations; the free surface's columns are those that hold particles
     let stations = crate::envelope::Envelope::new(ground, column);
     let mut thickness = vec![0.0f64; stations.stations.len()];
-    for (x, top, g) in crate::summary::surface(positions, ground, spacing, column) {
+    for (x, top, g) in crate::ground::surface(positions, ground, spacing, column) {
         if let Some(k) = stations.index(x) {
             thickness[k] = top - g;
         }

@@ -248,23 +248,6 @@ impl Scene {
     }
 }
 
-/// the ground segment under x (the last one for x beyond the profile).
-pub fn segment_at(ground: &[Vector], x: f64) -> (Vector, Vector) {
-    for w in ground.windows(2) {
-        if x < w[1].x {
-            return (w[0], w[1]);
-        }
-    }
-    let n = ground.len();
-    if n >= 2 { (ground[n - 2], ground[n - 1]) } else { (Vector::ZERO, Vector::X) }
-}
-
-/// ground height at x along the polyline (end segments extended).
-pub fn ground_height(ground: &[Vector], x: f64) -> f64 {
-    let (a, b) = segment_at(ground, x);
-    if b.x == a.x { a.y } else { a.y + (b.y - a.y) * (x - a.x) / (b.x - a.x) }
-}
-
 /// FNV-1a 64-bit hash: stable across platforms and versions.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;

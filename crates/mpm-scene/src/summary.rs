@@ -1,5 +1,5 @@
 //! What a run reports, whatever front end ran it: [`RunSummary`] (the `mpm` command writes it as
-//! `summary.json`) and the runout measures of a flow ([`runout`], [`surface`]), taken from the
+//! `summary.json`) and the runout measures of a flow ([`runout`], [`surface`](crate::surface)), taken from the
 //! particles' positions over the ground.
 //!
 //! Field names are stable: `cargo xtask` and scripts read them.
@@ -7,7 +7,7 @@
 use mpm_solver::{EnergyLedger, Vector};
 use serde::{Deserialize, Serialize};
 
-use crate::scene::ground_height;
+use crate::ground::{ground_height, surface};
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -271,35 +271,6 @@ fn main_mass_extent(positions: &[Vector], mass: &[f64], gap: f64) -> (f64, f64, 
         }
     }
     (best.0, best.1, leading)
-}
-
-/// The free surface: per column of width `column` holding particles, (column centre x, surface
-/// height, ground height), the surface being the highest particle above the ground there plus
-/// half a spacing.
-pub fn surface(
-    positions: &[Vector],
-    ground: &[Vector],
-    spacing: f64,
-    column: f64,
-) -> Vec<(f64, f64, f64)> {
-    let x0 = ground.first().map_or(0.0, |g| g.x);
-    let mut tops: std::collections::BTreeMap<i64, f64> = std::collections::BTreeMap::new();
-    for p in positions {
-        if !p.is_finite() {
-            continue;
-        }
-        let k = ((p.x - x0) / column).floor() as i64;
-        let h = p.y - ground_height(ground, p.x) + 0.5 * spacing;
-        let e = tops.entry(k).or_insert(f64::NEG_INFINITY);
-        *e = e.max(h);
-    }
-    tops.into_iter()
-        .map(|(k, h)| {
-            let x = x0 + (k as f64 + 0.5) * column;
-            let g = ground_height(ground, x);
-            (x, g + h.max(0.0), g)
-        })
-        .collect()
 }
 
 /// What `summary.json` reports under `runout`: the measures at the end ([`RunoutMetrics`], its

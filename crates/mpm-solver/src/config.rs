@@ -112,10 +112,20 @@ pub enum TimeStep {
     Fixed(Real),
 }
 
+/// The paper's advice, Δt ≈ 0.1 L/c (§2(4)): the Courant number a scene gets by default.
+pub const DEFAULT_COURANT: Real = 0.1;
+
+/// The explicit scheme's stability bound on the Courant number (eq 13).
+pub const MAX_COURANT: Real = 1.0;
+
+/// Nodes lighter than this fraction of the mean particle mass take body force only (§2(3)): the
+/// default of [`SolverConfig::small_mass_ratio`].
+pub const DEFAULT_SMALL_MASS_RATIO: Real = 1e-4;
+
 impl Default for TimeStep {
-    /// the paper's advice, Δt ≈ 0.1 L/c.
+    /// [`DEFAULT_COURANT`].
     fn default() -> Self {
-        TimeStep::Courant(0.1)
+        TimeStep::Courant(DEFAULT_COURANT)
     }
 }
 
@@ -226,7 +236,7 @@ impl Default for SolverConfig {
             boundaries: Boundaries::default(),
             periodic: None,
             walls: Vec::new(),
-            small_mass_ratio: 1e-4,
+            small_mass_ratio: DEFAULT_SMALL_MASS_RATIO,
             objective_stress: false,
             gravity_ramp: 0.0,
             transfer: Transfer::Flip,

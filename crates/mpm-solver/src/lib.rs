@@ -44,6 +44,7 @@
 //! ```
 
 pub mod config;
+mod consistent;
 pub mod energy;
 pub mod error;
 pub mod generate;
@@ -52,17 +53,23 @@ pub mod math;
 mod par;
 pub use par::{PARTICLES_PER_THREAD, useful_threads};
 pub mod particles;
+mod report;
+mod scratch;
+mod setup;
+mod signal;
 pub mod solver;
 mod stages;
 
 pub use config::{
-    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep,
-    Transfer,
+    Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT, MassMatrix,
+    Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep, Transfer,
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
 pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleReport};
 pub use math::{Matrix, Real, Vector};
 pub use particles::{NewParticle, Particles};
-pub use solver::{BranchCounts, Checkpoint, Observer, RunEnd, Solver, StepReport, estimated_bytes};
-pub use stages::timestep::{StepLimit, displacement_dt, stable_dt};
+pub use report::{BranchCounts, Checkpoint, RunEnd, StepReport};
+pub use setup::estimated_bytes;
+pub use signal::{StepLimit, displacement_dt, stable_dt};
+pub use solver::{END_SLACK, Observer, Solver, reached};

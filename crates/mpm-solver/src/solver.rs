@@ -19,93 +19,30 @@
 //! A [`Scheme`] only orders stages 3–6 (see [`Solver::step`]).
 
 use std::ops::ControlFlow;
-use std::sync::atomic::{AtomicBool, AtomicU32};
 
 use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor};
-use mpm_contact::{Boundary, Wall};
-use mpm_grid::{ActiveNodes, NodeId, ShapeFunctions};
-use serde::{Deserialize, Serialize};
+use mpm_grid::{NodeId, ShapeFunctions};
 
 use crate::config::{Scheme, SolverConfig, Transfer};
+use crate::consistent::Solve;
 use crate::energy::{Dissipation, EnergyLedger};
 use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
-use crate::stages::mass::{ConsistentScratch, Solve};
-use crate::stages::timestep::{Fastest, signal_cap};
+use crate::report::{BranchCounts, Checkpoint, RunEnd, StepReport};
+use crate::scratch::{Ahead, Scratch};
+use crate::setup::{outside_walls, reference_density, validate_particles};
+use crate::signal::{Fastest, signal_cap};
 
-/// What one step did.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepReport {
-    /// Steps completed, including this one.
-    pub step: u64,
-    /// Simulated time at the end of the step (s).
-    pub time: Real,
-    /// The step's Δt (s).
-    pub dt: Real,
-    /// The Courant number Δt·max(c + |v|)/L of the step.
-    pub courant: Real,
-    /// Number of active grid nodes.
-    pub active_nodes: usize,
-    /// How many particles took each branch of their model in the step's last stress update.
-    pub branches: BranchCounts,
-}
+/// Relative slack of the end time: a clock within it of the end time has reached it (the
+/// round-off of summed steps, never a physical time difference).
+pub const END_SLACK: Real = 1e-12;
 
-/// How many particles took each branch of their material's model in one stress update, counted by
-/// the index the model reports ([`mpm_constitutive::Branch`]) and named by the model
-/// ([`ConstitutiveModel::BRANCHES`]): the solver knows no model's vocabulary.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BranchCounts {
-    names: &'static [&'static str],
-    counts: [usize; MAX_BRANCHES],
-}
-
-impl BranchCounts {
-    /// counts of the branches `names` from a tally by index; with `counted` false (an elastic
-    /// model, whose updates the solver does not tally), all `particles` are on the elastic branch.
-    pub(crate) fn new(
-        names: &'static [&'static str],
-        mut counts: [usize; MAX_BRANCHES],
-        particles: usize,
-        counted: bool,
-    ) -> Self {
-        if !counted {
-            counts = [0; MAX_BRANCHES];
-            counts[0] = particles;
-        }
-        Self { names, counts }
-    }
-
-    /// no particle counted yet (before the first step).
-    pub(crate) fn none(names: &'static [&'static str]) -> Self {
-        Self { names, counts: [0; MAX_BRANCHES] }
-    }
-
-    /// the number of particles on the branch called `name`; `None` for a name the model does not
-    /// use.
-    pub fn get(&self, name: &str) -> Option<usize> {
-        self.names.iter().position(|n| *n == name).map(|i| self.counts[i])
-    }
-
-    /// (name, count) of every branch of the model, in its order (the elastic branch first).
-    pub fn iter(&self) -> impl Iterator<Item = (&'static str, usize)> + '_ {
-        self.names.iter().copied().zip(self.counts)
-    }
-
-    /// the particles on any branch but the elastic one.
-    pub fn plastic(&self) -> usize {
-        self.counts.iter().skip(1).sum()
-    }
-}
-
-/// Why [`Solver::run_until`] ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RunEnd {
-    /// The end time was reached.
-    EndTime,
-    /// The observer asked to stop.
-    Stopped,
+/// whether the clock `time` has reached `end_time` ([`END_SLACK`]): the one test of
+/// [`Solver::run_until`] and of a front end deciding whether a run ended early.
+pub fn reached(time: Real, end_time: Real) -> bool {
+    time >= end_time * (1.0 - END_SLACK)
 }
 
 /// Receives every step's report and read access to the solver, so that a front end can write
@@ -119,268 +56,6 @@ pub trait Observer<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for () {
     fn after_step(&mut self, _: &Solver<M, S, N>, _: &StepReport) -> ControlFlow<()> {
         ControlFlow::Continue(())
-    }
-}
-
-/// Everything needed to continue a run exactly: particles, clock and accumulated dissipation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Checkpoint<St> {
-    /// Particle state.
-    pub particles: Particles<St>,
-    /// Simulated time (s).
-    pub time: Real,
-    /// Steps completed.
-    pub step: u64,
-    /// Energy dissipated so far.
-    pub dissipation: Dissipation,
-    /// Stored energy at the start of the run (the ledger's reference).
-    pub initial_stored: Real,
-    /// Lightest initial density of each material (kg/m³): the time step's reference (see
-    /// `stages/timestep.rs`); empty in a new run, where the particles' densities set it.
-    pub reference_density: Vec<Real>,
-}
-
-/// A node that a boundary may hold: its dense index and the planes near it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct BoundaryNode {
-    pub(crate) node: u32,
-    /// Its planes are `Scratch::node_planes[first..first + count]`: the grid's sides through it
-    /// first, then the walls near it.
-    pub(crate) first: u32,
-    pub(crate) count: u32,
-    /// For a ghost node of a wide stencil: its image across the plane.
-    pub(crate) mirror: Option<Mirror>,
-    /// With periodic sides, for an image node beyond a side: the index in `Scratch::boundary`
-    /// of its partner (the same column of nodes), which books the pair's boundary work.
-    pub(crate) partner: Option<u32>,
-}
-
-impl BoundaryNode {
-    /// the range of its planes in `Scratch::node_planes`.
-    pub(crate) fn planes(&self) -> std::ops::Range<usize> {
-        self.first as usize..(self.first + self.count) as usize
-    }
-}
-
-/// A held ghost node behind a fixed plane: it ends the grid solve as its image mirrored
-/// (`stages/grid.rs`), and the particles' momentum changes by m_g times its change from the trial
-/// values, which the ledger books.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FixedGhost {
-    pub(crate) ghost: u32,
-    pub(crate) image: u32,
-    /// false for a periodic image, whose partner books the pair's impulse
-    pub(crate) books: bool,
-    /// the ghost's acceleration and velocity before the boundary conditions
-    pub(crate) trial: (Vector, Vector),
-}
-
-/// One plane near a boundary node, placed as a [`Wall`]: a grid side passes through the node (or,
-/// for a ghost node, halfway to its image), a declared wall lies wherever the scene put it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct NodePlane {
-    pub(crate) wall: Wall,
-    /// The plane holds the node whatever the material does: a `Fixed` plane, or any plane under
-    /// [`crate::Contact::Node`], with the node on its face or inside its solid.
-    pub(crate) always: bool,
-    /// The plane holds the node during the coming step (see [`crate::Contact`]); set every step.
-    pub(crate) held: bool,
-}
-
-/// The mirror image of a ghost node (a node outside the grid, reached by wide stencils) across a
-/// boundary plane.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Mirror {
-    /// Dense index of the image node.
-    pub(crate) image: u32,
-    /// The plane's unit normal, into the material.
-    pub(crate) normal: Vector,
-    /// A `Fixed` plane holds the material in both directions.
-    pub(crate) fixed: bool,
-}
-
-impl Mirror {
-    /// The velocity of the "wall" a ghost node meets: the velocity interpolated on the plane has
-    /// the normal part (v_ghost + v_image)·n times a positive weight (the node on the plane is held
-    /// by the contact law), so the ghost must not move into the plane faster than −v_image·n.
-    /// Contact is applied to the ghost in the frame of a wall moving at that normal velocity:
-    /// unilateral, with friction on the impulse that actually supports the material.
-    pub(crate) fn wall_velocity(&self, image: Vector) -> Vector {
-        -image.dot(self.normal) * self.normal
-    }
-}
-
-/// What the last step's final particle loop left for the next `locate` (see
-/// [`Scratch::stencils_ahead`]).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Ahead {
-    /// some particle's node ids differ from the ones the active set was built from.
-    pub(crate) changed: bool,
-    /// `node_index` holds every particle's new nodes in the current active set: no new node id
-    /// is missing from it (the set may still have to shrink).
-    pub(crate) numbered: bool,
-}
-
-/// Per-step memory, reused between steps (no allocation once the material stops growing).
-#[derive(Debug)]
-pub(crate) struct Scratch<F, const N: usize> {
-    /// Grid node id of each particle's stencil's first node: the others follow from it
-    /// ([`mpm_grid::stencil_nodes`]).
-    pub(crate) first_node: Vec<NodeId>,
-    /// Dense active-node indices of each particle's stencil.
-    pub(crate) node_index: Vec<[u32; N]>,
-    /// The factors S_ip and G_ip are computed from ([`ShapeFunctions::Factors`]): each pass
-    /// that needs them expands them again, cheaper than keeping the N weights and gradients.
-    pub(crate) factors: Vec<F>,
-    /// The active nodes.
-    pub(crate) active: ActiveNodes,
-    /// Particles binned by the 8 × 8 node block holding their stencil's first node, in
-    /// increasing particle order: bin b is `bin_particle[bin_start[b]..bin_start[b + 1]]`.
-    pub(crate) bin_start: Vec<u32>,
-    pub(crate) bin_particle: Vec<AtomicU32>,
-    /// Each particle's first stencil node, as a place in its block's patch (`p2g.rs`).
-    pub(crate) base: Vec<u8>,
-    /// Each active node's block rank and place in that block's patch.
-    pub(crate) node_block: Vec<u32>,
-    pub(crate) node_local: Vec<u8>,
-    /// Each block's neighbours below-left, below and left (`u32::MAX` where inactive): the
-    /// blocks whose patches overlap it.
-    pub(crate) neighbours: Vec<[u32; 3]>,
-    /// Per-block patches of partial particle-to-grid sums (`p2g.rs`).
-    pub(crate) patch_mass: Vec<Real>,
-    pub(crate) patch_momentum: Vec<Vector>,
-    pub(crate) patch_force: Vec<Vector>,
-    /// Which active nodes some stencil holds (the binning's check that the set is unchanged).
-    pub(crate) referenced: Vec<AtomicBool>,
-    /// Scratch of the counting sorts (`par::counting_sort`).
-    pub(crate) sort_counts: Vec<u32>,
-    /// Under surface contact, the (particle, slot) entries `p * N + k` of each boundary node
-    /// in increasing particle order: those of `boundary[b]` are
-    /// `contact_entry[contact_start[b]..contact_start[b + 1]]`.
-    pub(crate) contact_start: Vec<u32>,
-    pub(crate) contact_entry: Vec<AtomicU32>,
-    /// Position in `boundary` of each active node under surface contact, else `u32::MAX`.
-    pub(crate) boundary_of: Vec<u32>,
-    /// With periodic sides: (image, partner) dense indices of each active node beyond a side
-    /// whose partner column node is active too (built with the active set).
-    pub(crate) periodic_pairs: Vec<(u32, u32)>,
-    /// m_i.
-    pub(crate) mass: Vec<Real>,
-    /// v_i (from P2G, then the MUSL remap).
-    pub(crate) velocity: Vec<Vector>,
-    /// f_i = f_i^int + f_i^ext.
-    pub(crate) force: Vec<Vector>,
-    /// a_i after boundary conditions. The end-of-step velocity is never stored: it is
-    /// v_i^L = v_i + a_i Δt (eq 5), an identity the contact layer keeps at boundary nodes too.
-    pub(crate) acceleration: Vec<Vector>,
-    /// Nodes on a declared boundary or near a wall.
-    pub(crate) boundary: Vec<BoundaryNode>,
-    /// The planes of the boundary nodes (`BoundaryNode::planes`).
-    pub(crate) node_planes: Vec<NodePlane>,
-    /// The planes holding one node, gathered for the contact law (reused).
-    pub(crate) plane_buf: Vec<Boundary>,
-    /// (image, ghost force, ghost mass, books the impulse) of the ghosts behind fixed planes that
-    /// the lumped grid solve ties to their images (`stages/grid.rs`, reused).
-    pub(crate) ties: Vec<(u32, Vector, Real, bool)>,
-    /// The held ghost nodes behind fixed planes in this step's grid solve (either matrix).
-    pub(crate) fixed_ghosts: Vec<FixedGhost>,
-    /// The arrays below `first_node` describe the current `first_node` (false before the first
-    /// locate, after a failed one, and after a stress update that changed some node ids).
-    pub(crate) located: bool,
-    /// `Some` when the last step's final particle loop already put every particle's stencil at
-    /// its current position into `first_node` and `factors`; `None` makes `locate`
-    /// compute them.
-    pub(crate) stencils_ahead: Option<Ahead>,
-    /// Unconstrained velocities of the boundary nodes while a strain update uses constrained ones.
-    pub(crate) saved: Vec<Vector>,
-    /// (node, plane normal) of every plane that pushed on a node in this step's grid solve
-    /// (surface contact only): their particles take the normal velocity as in PIC.
-    pub(crate) held: Vec<(u32, Vector)>,
-    /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
-    pub(crate) corrections: Vec<(u32, Vector)>,
-    /// Counts rebuilds of the active set (tables keyed on the set's numbering compare it).
-    pub(crate) active_generation: u64,
-    /// The consistent mass matrix and its solver's vectors (`stages/mass.rs`); empty when lumped.
-    pub(crate) consistent: ConsistentScratch,
-    /// How often `locate` kept everything, kept the active set, rebuilt it (tests only).
-    #[cfg(test)]
-    pub(crate) paths: [usize; 3],
-}
-
-impl<F, const N: usize> Scratch<F, N> {
-    fn new() -> Self {
-        Self {
-            first_node: Vec::new(),
-            node_index: Vec::new(),
-            factors: Vec::new(),
-            active: ActiveNodes::new(),
-            bin_start: Vec::new(),
-            bin_particle: Vec::new(),
-            base: Vec::new(),
-            node_block: Vec::new(),
-            node_local: Vec::new(),
-            neighbours: Vec::new(),
-            patch_mass: Vec::new(),
-            patch_momentum: Vec::new(),
-            patch_force: Vec::new(),
-            referenced: Vec::new(),
-            sort_counts: Vec::new(),
-            contact_start: Vec::new(),
-            contact_entry: Vec::new(),
-            boundary_of: Vec::new(),
-            periodic_pairs: Vec::new(),
-            mass: Vec::new(),
-            velocity: Vec::new(),
-            force: Vec::new(),
-            acceleration: Vec::new(),
-            boundary: Vec::new(),
-            node_planes: Vec::new(),
-            plane_buf: Vec::new(),
-            ties: Vec::new(),
-            fixed_ghosts: Vec::new(),
-            located: false,
-            stencils_ahead: None,
-            saved: Vec::new(),
-            held: Vec::new(),
-            corrections: Vec::new(),
-            active_generation: 0,
-            consistent: ConsistentScratch::new(),
-            #[cfg(test)]
-            paths: [0; 3],
-        }
-    }
-
-    /// heap bytes held (for memory reports).
-    fn heap_bytes(&self) -> usize {
-        self.first_node.capacity() * size_of::<NodeId>()
-            + self.node_index.capacity() * size_of::<[u32; N]>()
-            + self.factors.capacity() * size_of::<F>()
-            + self.active.len() * (size_of::<NodeId>() + 8)
-            + (self.bin_start.capacity()
-                + self.bin_particle.capacity()
-                + self.sort_counts.capacity()
-                + self.node_block.capacity()
-                + self.contact_start.capacity()
-                + self.contact_entry.capacity()
-                + self.boundary_of.capacity()
-                + 2 * self.periodic_pairs.capacity())
-                * size_of::<u32>()
-            + self.base.capacity()
-            + self.node_local.capacity()
-            + self.referenced.capacity()
-            + self.neighbours.capacity() * size_of::<[u32; 3]>()
-            + self.patch_mass.capacity() * size_of::<Real>()
-            + (self.patch_momentum.capacity() + self.patch_force.capacity()) * size_of::<Vector>()
-            + self.mass.capacity() * size_of::<Real>()
-            + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
-                * size_of::<Vector>()
-            + self.boundary.capacity() * size_of::<BoundaryNode>()
-            + self.node_planes.capacity() * size_of::<NodePlane>()
-            + self.plane_buf.capacity() * size_of::<Boundary>()
-            + self.ties.capacity() * size_of::<(u32, Vector, Real, bool)>()
-            + self.fixed_ghosts.capacity() * size_of::<FixedGhost>()
-            + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
-            + self.consistent.heap_bytes()
     }
 }
 
@@ -887,8 +562,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         observer: &mut impl Observer<M, S, N>,
     ) -> Result<RunEnd, SolverError> {
         // A remainder this small relative to the end time is rounding, not a step to take.
-        const END_SLACK: Real = 1e-12;
-        while self.time < end_time * (1.0 - END_SLACK) {
+        while !reached(self.time, end_time) {
             let report = self.step_capped(end_time - self.time)?;
             if observer.after_step(self, &report).is_break() {
                 return Ok(RunEnd::Stopped);
@@ -896,145 +570,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         Ok(RunEnd::EndTime)
     }
-}
-
-/// the most bytes the factors of a 4-node stencil take (`Bilinear<TerrainGrid>`: a, b, ∂b/∂x).
-const FACTORS_4: usize = 3 * size_of::<Real>();
-/// the most bytes the factors of a 3 × 3 stencil take (uGIMP, B-spline: 2 × 3 (weight, slope)).
-const FACTORS_9: usize = 12 * size_of::<Real>();
-
-/// heap bytes a running solver of `particles` particles, `nodes` active nodes, stencils of
-/// `stencil` nodes, a constitutive state of `state_bytes` bytes and (with `apic`) affine
-/// matrices holds: about what [`Solver::heap_bytes`] reports once it runs (the patches of
-/// partial sums are charged for blocks half full of nodes), computed without building it, so
-/// that a front end can refuse a scene that does not fit in memory before allocating anything.
-pub fn estimated_bytes(
-    particles: usize,
-    nodes: usize,
-    stencil: usize,
-    state_bytes: usize,
-    apic: bool,
-) -> u64 {
-    let per_particle = 3 * size_of::<Vector>()
-        + 2 * size_of::<Real>()
-        + size_of::<PlaneTensor>()
-        + state_bytes
-        + 2 * size_of::<u16>()
-        + if apic { size_of::<Matrix>() } else { 0 }
-        // first node id, dense indices, and the factors of the weights and gradients: at most
-        // 3 numbers for a 4-node stencil, 2 × 3 (weight, slope) pairs for a 3 × 3 one
-        + size_of::<NodeId>()
-        + stencil * size_of::<u32>()
-        + (if stencil <= 4 { FACTORS_4 } else { FACTORS_9 })
-        // bin entry, place in the block's patch
-        + size_of::<u32>()
-        + 1;
-    // Each 8 × 8 block holds a patch of side² partial sums whatever its fill, plus its bin
-    // start, neighbours and sort counters: charged per node as if blocks were half full (a
-    // full block costs half this, a thin strip of material more).
-    let side = 8 + (1..=stencil).find(|w| w * w >= stencil).unwrap_or(1) - 1;
-    let per_block = side * side * (size_of::<Real>() + 2 * size_of::<Vector>()) + 20 + 64;
-    let per_node = size_of::<NodeId>()
-        + 8
-        // block rank, place in the patch, referenced, boundary position
-        + size_of::<u32>() + 2 + size_of::<u32>()
-        + size_of::<Real>()
-        + 3 * size_of::<Vector>()
-        + per_block.div_ceil(32);
-    (particles as u64) * per_particle as u64 + (nodes as u64) * per_node as u64
-}
-
-/// the time step's reference density of each material: the checkpoint's (a resumed run keeps the
-/// density it started with), or in a new run the lightest density of each material's particles
-/// (a material no particle uses gets +∞, which leaves its particles uncapped should any appear).
-fn reference_density<St>(
-    p: &Particles<St>,
-    materials: usize,
-    saved: Vec<Real>,
-) -> Result<Vec<Real>, SolverError> {
-    if saved.is_empty() {
-        let mut lightest = vec![Real::INFINITY; materials];
-        for i in 0..p.len() {
-            let m = usize::from(p.material[i]);
-            lightest[m] = lightest[m].min(p.density(i));
-        }
-        return Ok(lightest);
-    }
-    if saved.len() != materials {
-        return Err(SolverError::InvalidSetting {
-            name: "checkpoint.reference_density",
-            value: saved.len() as f64,
-            expected: "one reference density per material",
-        });
-    }
-    if let Some(&bad) = saved.iter().find(|r| r.is_nan() || **r <= 0.0) {
-        return Err(SolverError::InvalidSetting {
-            name: "checkpoint.reference_density",
-            value: bad,
-            expected: "a positive density (kg/m³)",
-        });
-    }
-    Ok(saved)
-}
-
-/// refuses a new run with a particle inside a wall's solid: the wall would push it out through
-/// the material in the first steps (a scene error, not physics).
-fn outside_walls<St>(p: &Particles<St>, walls: &[Wall]) -> Result<(), SolverError> {
-    for (k, wall) in walls.iter().enumerate() {
-        if let Some(i) = p.position.iter().position(|&x| wall.contains(x)) {
-            return Err(SolverError::InvalidParticle {
-                particle: i,
-                position: p.position[i],
-                reason: format!(
-                    "inside the solid of wall {k} (face through ({}, {}), normal ({}, {}))",
-                    wall.point().x,
-                    wall.point().y,
-                    wall.normal().x,
-                    wall.normal().y
-                ),
-            });
-        }
-    }
-    Ok(())
-}
-
-fn validate_particles<St>(p: &Particles<St>, materials: usize) -> Result<(), SolverError> {
-    if !p.is_consistent() {
-        return Err(SolverError::InvalidSetting {
-            name: "particles",
-            value: p.len() as f64,
-            expected: "particle arrays of equal length",
-        });
-    }
-    for i in 0..p.len() {
-        let bad = |reason: String| SolverError::InvalidParticle {
-            particle: i,
-            position: p.position[i],
-            reason,
-        };
-        if !p.position[i].is_finite() {
-            return Err(bad("position is not finite".into()));
-        }
-        if !p.velocity[i].is_finite() {
-            return Err(bad("velocity is not finite".into()));
-        }
-        if !(p.mass[i] > 0.0 && p.mass[i].is_finite()) {
-            return Err(bad(format!("mass {} must be positive and finite", p.mass[i])));
-        }
-        if !(p.volume[i] > 0.0 && p.volume[i].is_finite()) {
-            return Err(bad(format!("volume {} must be positive and finite", p.volume[i])));
-        }
-        if !p.stress[i].is_finite() {
-            return Err(bad("stress is not finite".into()));
-        }
-        if usize::from(p.material[i]) >= materials {
-            return Err(bad(format!(
-                "material index {} but only {materials} material(s) are defined",
-                p.material[i]
-            )));
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -1094,10 +629,10 @@ mod tests {
         fn factors<S: ShapeFunctions<N>, const N: usize>() -> usize {
             size_of::<S::Factors>()
         }
-        assert!(factors::<Bilinear<RegularGrid>, 4>() <= super::FACTORS_4);
-        assert!(factors::<Bilinear<TerrainGrid>, 4>() <= super::FACTORS_4);
-        assert!(factors::<Gimp, 9>() <= super::FACTORS_9);
-        assert!(factors::<QuadraticBSpline, 9>() <= super::FACTORS_9);
+        assert!(factors::<Bilinear<RegularGrid>, 4>() <= crate::setup::FACTORS_4);
+        assert!(factors::<Bilinear<TerrainGrid>, 4>() <= crate::setup::FACTORS_4);
+        assert!(factors::<Gimp, 9>() <= crate::setup::FACTORS_9);
+        assert!(factors::<QuadraticBSpline, 9>() <= crate::setup::FACTORS_9);
     }
 
     /// A uniform body force is gravity by another name: a stressed elastic block on a floor under

@@ -8,8 +8,9 @@ use mpm_solver::generate::{self, Shape};
 use super::{Ctx, finite_pos, num, pair};
 use crate::error::SceneError;
 use crate::file::{BodySpec, SceneFile, ShapeFunctionKind, ShapeKind, Transfer, VtkField};
+use crate::ground::segment_at;
 use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
-use crate::scene::{GridBuilt, MaterialsBuilt, Seed, segment_at};
+use crate::scene::{GridBuilt, MaterialsBuilt, Seed};
 
 /// Each earlier body's shape, bounding box and range of seeds.
 type Placed = Vec<(Shape, [Vector; 2], std::ops::Range<usize>)>;

@@ -2,6 +2,7 @@
 //! solve, or an explicit gravity ramp), each method's fields checked against it.
 
 use mpm_solver::GeostaticSettings;
+use mpm_solver::geostatic;
 
 use super::{Ctx, num};
 use crate::error::SceneError;
@@ -82,23 +83,27 @@ pub(super) fn build(
                 "load_steps",
                 s.load_steps,
                 d.load_steps,
-                1000,
+                i64::from(geostatic::MAX_LOAD_STEPS),
                 "1 for an elastic material; 4–10 to follow a plastic loading path",
             )?;
             let max_iterations = count(
                 "max_iterations",
                 s.max_iterations,
                 d.max_iterations,
-                1000,
-                "the default 50 is plenty for a state that exists",
+                i64::from(geostatic::MAX_NEWTON_ITERATIONS),
+                &format!("the default {} is plenty for a state that exists", d.max_iterations),
             )?;
             let tolerance = s.tolerance.unwrap_or(d.tolerance);
-            if !(tolerance > 1e-15 && tolerance < 1.0) {
+            let (low, high) = geostatic::TOLERANCE_RANGE;
+            if !(tolerance > low && tolerance < high) {
                 return Err(ctx.range(
                     "initial_state.tolerance",
                     tolerance,
-                    "1e-15 < tolerance < 1",
-                    "use the default 1e-10 (Newton reaches it in a few iterations)",
+                    &format!("{low:e} < tolerance < {high}"),
+                    &format!(
+                        "use the default {:e} (Newton reaches it in a few iterations)",
+                        d.tolerance
+                    ),
                 ));
             }
             Ok(InitialState::Implicit(GeostaticSettings {

@@ -6,9 +6,10 @@ use mpm_solver::{Boundaries, Vector};
 use super::{Ctx, finite_pos, pair, polyline};
 use crate::error::SceneError;
 use crate::file::{ObservedSpec, OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
+use crate::ground::{ground_height, segment_at};
 use crate::limits::MAX_PROBES;
 use crate::observed::ObservedDeposit;
-use crate::scene::{GridBuilt, Reference, ResolvedOutput, Seed, ground_height, segment_at};
+use crate::scene::{GridBuilt, Reference, ResolvedOutput, Seed};
 
 /// The output plan of a run that ends at `end_time` (s).
 pub(super) fn build(

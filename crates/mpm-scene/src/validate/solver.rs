@@ -4,6 +4,7 @@ use mpm_contact::Wall;
 use mpm_solver::{
     Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
 };
+use mpm_solver::{DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT};
 
 use super::{Ctx, finite_pos, num, pair};
 use crate::error::SceneError;
@@ -50,13 +51,15 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
             ));
         }
         (Some(c), None) => {
-            if !(c > 0.0 && c <= 1.0) {
+            if !(c > 0.0 && c <= MAX_COURANT) {
                 return Err(ctx.range(
                     "solver.courant",
                     c,
-                    "0 < courant ≤ 1 (explicit stability, eq 13)",
-                    "use the paper's advice `courant = 0.1`; above 1 the explicit step is \
-                     unstable",
+                    &format!("0 < courant ≤ {MAX_COURANT} (explicit stability, eq 13)"),
+                    &format!(
+                        "use the paper's advice `courant = {DEFAULT_COURANT}`; above \
+                         {MAX_COURANT} the explicit step is unstable"
+                    ),
                 ));
             }
             TimeStep::Courant(c)
@@ -67,12 +70,14 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
                     "solver.dt",
                     dt,
                     "0 < dt < ∞ (s), with a Courant number ≤ 1",
-                    "give a positive time step, or use `courant = 0.1` instead",
+                    &format!(
+                        "give a positive time step, or use `courant = {DEFAULT_COURANT}` instead"
+                    ),
                 ));
             }
             TimeStep::Fixed(dt)
         }
-        (None, None) => TimeStep::Courant(preset.map_or(0.1, |p| p.courant)),
+        (None, None) => TimeStep::Courant(preset.map_or(DEFAULT_COURANT, |p| p.courant)),
     };
     let gravity = s.gravity.unwrap_or([0.0, -mpm_solver::STANDARD_GRAVITY]);
     if !(gravity[0].is_finite() && gravity[1].is_finite()) {
@@ -93,7 +98,7 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
             "remove it or give a non-negative time",
         ));
     }
-    let small_mass_ratio = s.small_mass_ratio.unwrap_or(1e-4);
+    let small_mass_ratio = s.small_mass_ratio.unwrap_or(DEFAULT_SMALL_MASS_RATIO);
     if !(0.0..1.0).contains(&small_mass_ratio) {
         return Err(ctx.range(
             "solver.small_mass_ratio",
@@ -238,8 +243,9 @@ pub(super) fn first_dt(
                 ),
                 format!("dt ≤ {} s (Courant number ≤ 1, eq 13)", num(min_cell / signal)),
                 format!(
-                    "use `dt = {}` (Courant 0.1) or replace `dt` by `courant = 0.1`",
-                    num(0.1 * min_cell / signal)
+                    "use `dt = {}` (Courant {DEFAULT_COURANT}) or replace `dt` by \
+                     `courant = {DEFAULT_COURANT}`",
+                    num(DEFAULT_COURANT * min_cell / signal)
                 ),
             ));
         }
@@ -254,7 +260,10 @@ pub(super) fn first_dt(
                     num(min_cell)
                 ),
                 format!("dt ≤ {} s (at most one cell per step)", num(most)),
-                "use `courant = 0.1` instead of `dt` (Δt then follows the material)",
+                format!(
+                    "use `courant = {DEFAULT_COURANT}` instead of `dt` (Δt then follows the \
+                     material)"
+                ),
             ));
         }
     };

@@ -20,7 +20,8 @@ use rayon::prelude::*;
 use crate::config::{Contact, MassMatrix};
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::solver::{FixedGhost, NodePlane, Scratch, Solver};
+use crate::scratch::{FixedGhost, NodePlane, Scratch};
+use crate::solver::Solver;
 
 /// the planes of `planes` that hold their node this step, gathered into `buf` for the contact law.
 pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) -> &'a [Boundary] {

@@ -17,7 +17,8 @@ use crate::config::{Boundaries, Contact};
 use crate::error::SolverError;
 use crate::math::Vector;
 use crate::par::{chunk_len, counting_sort};
-use crate::solver::{BoundaryNode, Mirror, NodePlane, Scratch, Solver};
+use crate::scratch::{BoundaryNode, Mirror, NodePlane, Scratch};
+use crate::solver::Solver;
 use crate::stages::p2g::patch_side;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {

@@ -70,10 +70,12 @@ use mpm_grid::{NodeId, ShapeFunctions, stencil_side};
 use rayon::prelude::*;
 
 use crate::config::MassMatrix;
+use crate::consistent::Solve;
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
 use crate::par::chunk_len;
-use crate::solver::{NodePlane, Solver};
+use crate::scratch::NodePlane;
+use crate::solver::Solver;
 
 /// α, the share of the lumped matrix in the solved one (module docs): bounds the preconditioned
 /// condition number by 1/α = 20, so a singular M^C (a lone grain) still has one bounded answer.
@@ -91,82 +93,6 @@ pub const SOLVE_TOLERANCE: Real = 1e-13;
 /// Iterations allowed: with the spectrum in [α, 1] the bound of the module docs reaches
 /// [`SOLVE_TOLERANCE`] in about 70; more means the matrix is not what this module built.
 pub const MAX_ITERATIONS: usize = 300;
-
-/// Which system a consistent solve is for (named in errors).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Solve {
-    /// M v = Σ m_p S_ip v_p after particle-to-grid.
-    Velocity,
-    /// M a = f, the grid solve.
-    Acceleration,
-    /// M v = Σ m_p S_ip v_p of the MUSL/USAVG remap (eq 8).
-    Remap,
-}
-
-impl Solve {
-    /// what the system is, for messages.
-    pub(crate) fn name(self) -> &'static str {
-        match self {
-            Solve::Velocity => "particle-to-grid velocity",
-            Solve::Acceleration => "nodal acceleration",
-            Solve::Remap => "remapped velocity",
-        }
-    }
-}
-
-/// The consistent matrix and the solver's vectors, reused from step to step.
-#[derive(Debug, Default)]
-pub(crate) struct ConsistentScratch {
-    /// The active set's generation the neighbour table was built for (`u64::MAX`: never).
-    generation: u64,
-    /// Entries per row, (2w − 1)².
-    band: usize,
-    /// Dense index of each row's neighbour at each band place (the row's own index where that
-    /// node is inactive, whose entry then stays zero).
-    neighbours: Vec<u32>,
-    /// The matrix, row by row in the band layout.
-    values: Vec<Real>,
-    /// Nodes solved for (module docs: above the small-mass threshold, not held by a Coulomb or
-    /// rough plane).
-    free: Vec<bool>,
-    /// The nodes a re-solve prescribes that were solved for (freed again after it).
-    prescribed: Vec<u32>,
-    /// The nodes whose reactions the ledger books (`Solver::book_reactions`).
-    reacting: Vec<u32>,
-    /// Right-hand side, residual, search direction, its product with M.
-    rhs: Vec<Vector>,
-    residual: Vec<Vector>,
-    direction: Vec<Vector>,
-    product: Vec<Vector>,
-    /// Boundary nodes a plane held in this step's grid solve.
-    pub(crate) constrained: Vec<u32>,
-    /// (ghost, image) of the held ghosts behind fixed planes (`Scratch::fixed_ghosts`) that the
-    /// current solve ties, a_ghost = −a_image (both solved for): empty outside the re-solve.
-    slaves: Vec<(u32, u32)>,
-    /// Conjugate-gradient iterations over the run (all solves).
-    pub(crate) iterations: u64,
-}
-
-impl ConsistentScratch {
-    /// an empty scratch that builds its tables on first use.
-    pub(crate) fn new() -> Self {
-        Self { generation: u64::MAX, ..Default::default() }
-    }
-
-    /// heap bytes held.
-    pub(crate) fn heap_bytes(&self) -> usize {
-        self.neighbours.capacity() * size_of::<u32>()
-            + self.values.capacity() * size_of::<Real>()
-            + self.free.capacity()
-            + (self.prescribed.capacity() + self.reacting.capacity() + 2 * self.slaves.capacity())
-                * size_of::<u32>()
-            + (self.rhs.capacity()
-                + self.residual.capacity()
-                + self.direction.capacity()
-                + self.product.capacity())
-                * size_of::<Vector>()
-    }
-}
 
 /// the band place of the entry (row node at stencil slot k, column node at slot l), w the
 /// stencil side: offsets −(w − 1)…w − 1 along each axis, x fastest.

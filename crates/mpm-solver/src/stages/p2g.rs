@@ -23,10 +23,11 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use crate::config::Transfer;
+use crate::consistent::Solve;
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::solver::{Scratch, Solver};
-use crate::stages::mass::Solve;
+use crate::scratch::Scratch;
+use crate::solver::Solver;
 
 /// nodes along each side of a block's patch for stencils of `n` nodes: the block's 8 and the
 /// w − 1 beyond its upper and right edges that stencils anchored in it reach.

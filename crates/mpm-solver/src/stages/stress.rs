@@ -18,9 +18,11 @@ use crate::config::{Scheme, Transfer};
 use crate::error::SolverError;
 use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
-use crate::solver::{Ahead, BranchCounts, Solver};
+use crate::report::BranchCounts;
+use crate::scratch::Ahead;
+use crate::signal::{Fastest, SLOWEST, particle_signal, wave_modulus};
+use crate::solver::Solver;
 use crate::stages::locate::store;
-use crate::stages::timestep::{Fastest, SLOWEST, particle_signal, wave_modulus};
 
 /// What one chunk of particles reports back.
 struct ChunkTally {
@@ -193,6 +195,17 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             })
             .collect();
 
+        self.merge_tallies(results, last)
+    }
+
+    /// adds the chunks' tallies in chunk order (the same sums for any thread count): the
+    /// dissipation, the branch counts and, after the last update of a step, the fastest signal
+    /// and what the next `locate` may keep.
+    fn merge_tallies(
+        &mut self,
+        results: Vec<Result<ChunkTally, SolverError>>,
+        last: bool,
+    ) -> Result<BranchCounts, SolverError> {
         let (mut branches, mut signal) = ([0; MAX_BRANCHES], SLOWEST);
         let (mut changed, mut missing, mut outside) = (false, false, false);
         for r in results {

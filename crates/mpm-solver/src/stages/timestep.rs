@@ -9,7 +9,7 @@
 //! ŝ_p = ĉ_p + |v_p| its capped signal (ĉ_p = √(M/max(ρ_p, ρ_ref)), ρ_ref the lightest initial
 //! density of the particle's material). So a particle compacted above ρ_ref counts with its
 //! current density; a dilated one with ρ_ref, but never so far that its own Courant number
-//! Δt·s̃_p/L exceeds C_max = 1 ([`TRUE_COURANT_MAX`]). Eq 13 with the current density alone lets
+//! Δt·s̃_p/L exceeds C_max = 1 ([`TRUE_COURANT_MAX`](crate::signal::TRUE_COURANT_MAX)). Eq 13 with the current density alone lets
 //! the loosest particle set Δt for everyone, and the loosest particles are those that have
 //! separated from the mass: grains thrown off the free surface or the front, whose volume grows
 //! by the FLIP strain increments of the few nodes they share with nothing, carry no stress (a
@@ -43,11 +43,10 @@ use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
 use crate::math::Real;
 use crate::par::chunk_len;
+use crate::signal::{
+    Fastest, SLOWEST, StepLimit, TRUE_COURANT_MAX, particle_signal, stable_dt, wave_modulus,
+};
 use crate::solver::Solver;
-
-/// The largest Courant number Δt·s̃_p/L any particle may have with its true signal s̃_p
-/// (module docs): eq 13's own stability bound.
-pub const TRUE_COURANT_MAX: Real = 1.0;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// the weight C/C_max of a particle's true signal against its capped one (module docs): 1
@@ -136,142 +135,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             })
             .reduce(|| SLOWEST, Fastest::merge)
     }
-}
-
-/// The largest Δt for which a particle at speed `v` under gravity `g` moves at most `d`:
-/// the root of v Δt + ½ g Δt² = d (+∞ when nothing moves). The time step's second bound
-/// (module docs), exported so that a front end can predict the first Δt.
-pub fn displacement_dt(d: Real, v: Real, g: Real) -> Real {
-    // 2d / (v + √(v² + 2gd)): the rationalised root, exact also for g = 0 (d/v).
-    2.0 * d / (v + (v * v + 2.0 * g * d).sqrt())
-}
-
-/// Why a fixed Δt cannot run (a Courant Δt always can).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum StepLimit {
-    /// the fixed Δt gives the fastest signal a Courant number above 1 (eq 13).
-    Courant {
-        /// Δt·s/L.
-        courant: Real,
-        /// the fixed Δt (s).
-        dt: Real,
-    },
-    /// gravity and the fastest speed carry a particle more than one cell in the fixed Δt.
-    Displacement {
-        /// (|v|_max Δt + ½ |g| Δt²) / L.
-        cells: Real,
-        /// the fixed Δt (s).
-        dt: Real,
-    },
-}
-
-/// The Δt of a step (eq 13 and the displacement bound, module docs) from the fastest signal
-/// `signal` = max_p s_p (m/s) and the fastest speed `v_max` (m/s), with `cell` the smallest cell
-/// size L (m) and `gravity` = |g| (m/s²): C·L/s bounded by [`displacement_dt`] for a Courant
-/// number C, or the fixed Δt after checking it. The solver calls it before every step and a
-/// front end for the first one, so both apply one rule (a front end computing c = √(M/ρ) from
-/// the initial density may differ from the solver's M·V/m in the last bit).
-pub fn stable_dt(
-    time_step: TimeStep,
-    cell: Real,
-    gravity: Real,
-    signal: Real,
-    v_max: Real,
-) -> Result<Real, StepLimit> {
-    match time_step {
-        TimeStep::Courant(c) => {
-            Ok((c * cell / signal).min(displacement_dt(c * cell, v_max, gravity)))
-        }
-        TimeStep::Fixed(dt) => {
-            let courant = dt * signal / cell;
-            if courant > 1.0 {
-                return Err(StepLimit::Courant { courant, dt });
-            }
-            let cells = (v_max * dt + 0.5 * gravity * dt * dt) / cell;
-            if cells > TRUE_COURANT_MAX {
-                return Err(StepLimit::Displacement { cells, dt });
-            }
-            Ok(dt)
-        }
-    }
-}
-
-/// What the time step needs from the particles: the fastest signal max_p s_p and the fastest
-/// speed max_p |v_p|, each with its particle.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Fastest {
-    pub(crate) signal: (Real, usize),
-    pub(crate) speed: (Real, usize),
-}
-
-impl Fastest {
-    /// `self` with particle `i` of signal `signal` and speed `speed` taken into account.
-    #[inline(always)]
-    pub(crate) fn with(self, signal: Real, speed: Real, i: usize) -> Self {
-        Self { signal: faster(self.signal, (signal, i)), speed: faster(self.speed, (speed, i)) }
-    }
-
-    /// the faster of both parts (an associative, commutative merge of chunk results).
-    pub(crate) fn merge(a: Self, b: Self) -> Self {
-        Self { signal: faster(a.signal, b.signal), speed: faster(a.speed, b.speed) }
-    }
-}
-
-/// The identity of [`Fastest::merge`]: no signal, no particle.
-pub(crate) const SLOWEST: Fastest = Fastest { signal: (0.0, usize::MAX), speed: (0.0, usize::MAX) };
-
-/// (M, M/ρ_ref) of a particle of material `model` at `state`: the material's `modulus` and
-/// `cap`, asked once per material, unless the model's wave speed varies with the state
-/// ([`ConstitutiveModel::WAVE_SPEED_VARIES`]); then the model is asked at this particle's state,
-/// with ρ_ref its material's `reference` density (∞ for none: no cap).
-#[inline(always)]
-pub(crate) fn wave_modulus<M: ConstitutiveModel>(
-    model: &M,
-    state: &M::State,
-    modulus: Real,
-    cap: Real,
-    reference: Real,
-) -> (Real, Real) {
-    if M::WAVE_SPEED_VARIES {
-        let modulus = model.p_wave_modulus(state);
-        (modulus, signal_cap(modulus, reference))
-    } else {
-        (modulus, cap)
-    }
-}
-
-/// M/ρ_ref, the cap of c̃_p² (module docs); +∞ where no particle of the material gave a
-/// reference density ρ_ref (its true signal counts).
-pub(crate) fn signal_cap(modulus: Real, reference: Real) -> Real {
-    if reference.is_finite() { modulus / reference } else { Real::INFINITY }
-}
-
-/// max(ĉ_p + |v_p|, w (c̃_p + |v_p|)) with c̃_p² = M V_p / m_p for P-wave modulus M,
-/// ĉ_p² = min(c̃_p², `cap`), `cap` = M/ρ_ref and w = `weight` = C/C_max (module docs), for a
-/// particle of speed |v_p| = `speed`; a non-finite value counts as infinite.
-#[inline(always)]
-pub(crate) fn particle_signal(
-    modulus: Real,
-    cap: Real,
-    weight: Real,
-    volume: Real,
-    mass: Real,
-    speed: Real,
-) -> Real {
-    let c2 = modulus * volume / mass;
-    // A NaN volume must stay NaN (reported below), which `f64::min` would hide.
-    let s = if c2 > cap {
-        (cap.sqrt() + speed).max(weight * (c2.sqrt() + speed))
-    } else {
-        c2.sqrt() + speed
-    };
-    if s.is_finite() { s } else { Real::INFINITY }
-}
-
-/// the faster of two (signal, particle) pairs; ties go to the lower index.
-#[inline(always)]
-pub(crate) fn faster(a: (Real, usize), b: (Real, usize)) -> (Real, usize) {
-    if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a }
 }
 
 #[cfg(test)]
@@ -409,7 +272,7 @@ mod tests {
         let c_true = (s.materials()[0].p_wave_modulus() * s.particles().volume[1]
             / s.particles().mass[1])
             .sqrt();
-        assert!(dt * c_true / 0.25 <= super::TRUE_COURANT_MAX * (1.0 + DT_TOL));
+        assert!(dt * c_true / 0.25 <= crate::signal::TRUE_COURANT_MAX * (1.0 + DT_TOL));
     }
 
     #[test]
