@@ -124,6 +124,8 @@ pub struct MuI {
 impl MuI {
     /// a μ(I) material from validated parameters.
     pub fn new(params: MuIParams) -> Result<Self, ConstitutiveError> {
+        const MAX_I0: f64 = 10.0;
+        const GRAIN_DIAMETER_RANGE: (f64, f64) = (1e-6, 10.0);
         let elastic = LinearElastic::from_young_poisson(params.young, params.poisson)?;
         let checks = [
             ("mu_s", params.mu_s, params.mu_s.is_finite() && params.mu_s >= 0.0, "0 <= mu_s"),
@@ -133,12 +135,21 @@ impl MuI {
                 params.mu_2.is_finite() && params.mu_2 >= params.mu_s,
                 "mu_s <= mu_2 (finite)",
             ),
-            ("i0", params.i0, params.i0.is_finite() && params.i0 > 0.0, "i0 > 0"),
+            // Measured I_0 lie between 0.005 and 1 (GDR MiDi 2004); beyond 10 the flow rule's
+            // rate I_0 √(p/ρ_s)/d overflows at a step for ordinary pressures (1e308 gave NaN).
+            (
+                "i0",
+                params.i0,
+                params.i0 > 0.0 && params.i0 <= MAX_I0,
+                "0 < i0 <= 10 (measured values 0.005–1)",
+            ),
+            // From silt (a micrometre) to boulders (ten metres); a subnormal diameter (1e-320)
+            // made 1/d infinite.
             (
                 "grain_diameter",
                 params.grain_diameter,
-                params.grain_diameter.is_finite() && params.grain_diameter > 0.0,
-                "grain_diameter > 0 (m)",
+                (GRAIN_DIAMETER_RANGE.0..=GRAIN_DIAMETER_RANGE.1).contains(&params.grain_diameter),
+                "1e-6 <= grain_diameter <= 10 (m)",
             ),
             (
                 "grain_density",
@@ -480,6 +491,9 @@ mod tests {
             (MuIParams { mu_2: 0.1, ..p }, "mu_2"),
             (MuIParams { i0: 0.0, ..p }, "i0"),
             (MuIParams { grain_diameter: f64::NAN, ..p }, "grain_diameter"),
+            // inside the old ranges, but NaN at the first step (hostile input R9)
+            (MuIParams { i0: 1e308, ..p }, "i0"),
+            (MuIParams { grain_diameter: 1e-320, ..p }, "grain_diameter"),
             (MuIParams { grain_density: -1.0, ..p }, "grain_density"),
             (MuIParams { mu_s: -0.1, ..p }, "mu_s"),
         ] {

@@ -37,7 +37,39 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
             problem: "not text: an ESRI ASCII grid is plain text (is this a binary raster?)".into(),
         }
     })?;
-    parse(text, &file, bytes.len() as u64)
+    let raster = parse(text, &file, bytes.len() as u64)?;
+    geographic(path, &raster)?;
+    Ok(raster)
+}
+
+/// An ESRI ASCII grid carries no CRS: its map units are taken as metres. It is refused as
+/// being in degrees when its `.prj` beside it says so (a `GEOGCS` without a `PROJCS`), or when
+/// its cells are under a millimetre across an extent that fits in longitude and latitude (no
+/// DEM in metres has such cells; 1 arc-second is 2.8e-4 degrees).
+fn geographic(path: &Path, r: &Raster) -> Result<(), DemError> {
+    let file = path.display().to_string();
+    if let Ok(prj) = std::fs::read_to_string(path.with_extension("prj")) {
+        let wkt = prj.to_ascii_uppercase();
+        if wkt.contains("GEOGCS") && !wkt.contains("PROJCS") {
+            return Err(DemError::Geographic {
+                file,
+                evidence: "its .prj declares a geographic coordinate system (GEOGCS)".into(),
+            });
+        }
+    }
+    let [west, south, east, north] = r.extent();
+    let cell = r.cell();
+    let lon_lat = west >= -180.0 && east <= 360.0 && south >= -90.0 && north <= 90.0;
+    if cell < 1e-3 && lon_lat {
+        return Err(DemError::Geographic {
+            file,
+            evidence: format!(
+                "its cells of {cell} across an extent within longitude and latitude \
+                 ({west}…{east}, {south}…{north})"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The header's values, as they are read.

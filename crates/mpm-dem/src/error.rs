@@ -65,6 +65,17 @@ pub enum DemError {
         /// cell size along y (north).
         dy: f64,
     },
+    /// A raster in geographic coordinates (longitude and latitude in degrees): the solver
+    /// takes map coordinates and heights in metres.
+    #[error(
+        "{file}: {evidence}: its map coordinates are degrees of longitude and latitude, but heights, stations and cells are taken in metres; reproject it to a projected CRS in metres (e.g. its UTM zone: `gdalwarp -t_srs EPSG:326NN {file} out.tif`)"
+    )]
+    Geographic {
+        /// the raster's path.
+        file: String,
+        /// what shows it (the GeoTIFF's model type, the `.prj` file, the extent).
+        evidence: String,
+    },
     /// A GeoTIFF that cannot be decoded, or whose georeferencing is missing or unsupported.
     #[error("{file}: {problem}")]
     GeoTiff {

@@ -24,6 +24,9 @@ const MAX_COMPRESSION: u64 = 1024;
 
 /// GTRasterTypeGeoKey, and its PixelIsPoint value.
 const RASTER_TYPE_KEY: u16 = 1025;
+/// GTModelTypeGeoKey and its value for longitude/latitude coordinates (GeoTIFF 1.1, §7.1.3).
+const MODEL_TYPE_KEY: u16 = 1024;
+const MODEL_TYPE_GEOGRAPHIC: u16 = 2;
 const PIXEL_IS_POINT: u16 = 2;
 
 /// Reads the GeoTIFF at `path` (its first image).
@@ -95,16 +98,22 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
     if (sx - sy).abs() > 1e-9 * sx.max(sy) {
         return Err(DemError::NonSquareCells { file: file.clone(), dx: sx, dy: sy });
     }
-    let point = d
+    let keys: Vec<u16> = d
         .find_tag(Tag::GeoKeyDirectoryTag)
         .map_err(tiff)?
         .and_then(|v| v.into_u16_vec().ok())
-        .is_some_and(|keys| {
-            keys.get(4..)
-                .unwrap_or(&[])
-                .chunks_exact(4)
-                .any(|k| k[0] == RASTER_TYPE_KEY && k[1] == 0 && k[3] == PIXEL_IS_POINT)
+        .unwrap_or_default();
+    // (key, value) of the directory's short values (its first four shorts are its header)
+    let key = |id: u16| {
+        keys.get(4..).unwrap_or(&[]).chunks_exact(4).find(|k| k[0] == id && k[1] == 0).map(|k| k[3])
+    };
+    if key(MODEL_TYPE_KEY) == Some(MODEL_TYPE_GEOGRAPHIC) {
+        return Err(DemError::Geographic {
+            file: file.clone(),
+            evidence: "its GeoKeys declare a geographic model (GTModelTypeGeoKey = 2)".into(),
         });
+    }
+    let point = key(RASTER_TYPE_KEY) == Some(PIXEL_IS_POINT);
     // the map point of raster point (0, 0): the first cell's corner, or its centre
     let (i, j, x, y) = (tie[0], tie[1], tie[3], tie[4]);
     let shift = if point { 0.5 } else { 0.0 };

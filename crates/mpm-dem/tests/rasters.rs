@@ -182,3 +182,41 @@ fn a_truncated_ascii_grid_names_its_last_line() {
     let _ = std::fs::remove_file(&path);
     assert!(e.contains("line 7") && e.contains("after 10 of the 20 heights"), "{e}");
 }
+
+/// A DEM in degrees is refused, never taken for metres: a GeoTIFF whose GeoKeys declare a
+/// geographic model, an ESRI ASCII grid whose `.prj` is a GEOGCS, and one with arc-second cells
+/// inside longitude and latitude; the same grid in metres (a `.prj` with a PROJCS) is read.
+#[test]
+fn a_dem_in_degrees_is_refused_with_how_to_reproject() {
+    let dem = sampled(|x, y| x + y, [8, 8], 2.0, [0.0, 16.0]);
+    let path = temp("geographic.tif");
+    mpm_dem::geotiff::write(&dem, &path).unwrap();
+    let mut b = std::fs::read(&path).unwrap();
+    // the one key the writer puts, GTRasterTypeGeoKey (1025) = 1, becomes GTModelTypeGeoKey
+    // (1024) = 2, geographic
+    let key: Vec<u8> = [1025u16, 0, 1, 1].iter().flat_map(|k| k.to_le_bytes()).collect();
+    let at = b.windows(8).position(|w| w == key.as_slice()).unwrap();
+    let geo: Vec<u8> = [1024u16, 0, 1, 2].iter().flat_map(|k| k.to_le_bytes()).collect();
+    b[at..at + 8].copy_from_slice(&geo);
+    std::fs::write(&path, b).unwrap();
+    let e = Raster::read(&path).unwrap_err();
+    assert!(matches!(e, DemError::Geographic { .. }) && e.to_string().contains("gdalwarp"), "{e}");
+
+    let asc = temp("geographic.asc");
+    mpm_dem::ascii::write(&dem, &asc).unwrap();
+    let prj = asc.with_extension("prj");
+    std::fs::write(&prj, "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\"]]").unwrap();
+    assert!(matches!(Raster::read(&asc).unwrap_err(), DemError::Geographic { .. }));
+    std::fs::write(&prj, "PROJCS[\"WGS 84 / UTM zone 32N\",GEOGCS[\"WGS 84\"]]").unwrap();
+    assert!(Raster::read(&asc).is_ok());
+    std::fs::remove_file(&prj).unwrap();
+
+    // 1 arc-second cells near (8.5° E, 46.5° N), no .prj
+    let text = "ncols 3\nnrows 2\nxllcorner 8.5\nyllcorner 46.5\ncellsize 0.000277777778\n\
+                1 2 3\n4 5 6\n";
+    std::fs::write(&asc, text).unwrap();
+    let e = Raster::read(&asc).unwrap_err();
+    assert!(matches!(e, DemError::Geographic { .. }) && e.to_string().contains("0.000277"), "{e}");
+    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_file(&asc);
+}

@@ -118,3 +118,44 @@ fn the_consistent_mass_matrix_is_accepted_with_flip_and_refused_with_apic() {
     assert!(err.contains("apic.toml:") && err.contains("solver.mass"), "{err}");
     assert!(err.contains("use FLIP") && err.contains("`transfer`"), "the fix is named: {err}");
 }
+
+/// A rupture surface written as spreadsheets and GIS write it in much of Europe (`x;y`,
+/// decimal commas: `150;157,86`) gives the valley example's scene particle for particle (it was
+/// read as (150, 157): 417 particles instead of 383); a decimal comma in a comma-separated file
+/// is refused at its line, never read as another number.
+#[test]
+fn a_csv_with_decimal_commas_is_understood_or_refused_never_misread() {
+    let examples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples");
+    let scene_path = examples.join("valley_landslide.toml");
+    let original = mpm_run::load_scene_file(&scene_path).unwrap();
+    let dir = crate::temp_dir("european-csv");
+    std::fs::create_dir_all(dir.join("valley")).unwrap();
+    std::fs::copy(examples.join("valley/valley_side.asc"), dir.join("valley/valley_side.asc"))
+        .unwrap();
+    let csv = std::fs::read_to_string(examples.join("valley/rupture.csv")).unwrap();
+    let european: String =
+        csv.lines()
+            .map(|l| {
+                if l.starts_with('#') {
+                    l.to_string()
+                } else {
+                    l.replace(',', ";").replace('.', ",")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+    assert!(european.contains("150;157,86"), "{}", &european[..120]);
+    std::fs::write(dir.join("valley/rupture.csv"), &european).unwrap();
+    let text = std::fs::read_to_string(&scene_path).unwrap();
+    let scene = mpm_scene::load_scene_str_in(&text, "valley (European CSV)", &dir).unwrap();
+    assert_eq!(scene.particle_count(), 383);
+    let (a, b) = (&original.resolved().seeds, &scene.resolved().seeds);
+    assert!(a.iter().zip(b).all(|(p, q)| p.position == q.position));
+    // one decimal comma in a comma-separated file: its line, not a silent (150, 157)
+    let broken = csv.replacen("155,155.05292443915386", "155,155,05292443915386", 1);
+    std::fs::write(dir.join("valley/rupture.csv"), &broken).unwrap();
+    let e = mpm_scene::load_scene_str_in(&text, "valley (broken CSV)", &dir).unwrap_err();
+    let line = 1 + broken.lines().position(|l| l.starts_with("155,")).unwrap();
+    assert!(e.to_string().contains(&format!("line {line}: 3 fields")), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -36,8 +36,8 @@ impl SceneMaterial for MuI {
             "mu_s" | "mu_2" => {
                 "give friction coefficients 0 ≤ mu_s ≤ mu_2, e.g. 0.38 and 0.64 for glass beads"
             }
-            "i0" => "give I_0 > 0, e.g. 0.279 for glass beads",
-            "grain_diameter" => "give the grain diameter in m, e.g. 0.53e-3",
+            "i0" => "give 0 < I_0 <= 10, e.g. 0.279 for glass beads",
+            "grain_diameter" => "give the grain diameter in m (1e-6 to 10), e.g. 0.53e-3",
             "grain_density" => "give the grains' density, e.g. 2450 for glass",
             _ => super::elastic_fix(field),
         }

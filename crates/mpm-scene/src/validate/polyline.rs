@@ -238,16 +238,62 @@ pub(super) fn read_pairs(
     let mut picked = (0usize, 1usize);
     let mut header = false;
     let mut out = Vec::new();
+    // One delimiter per file, from its first line: `;` or a tab where a spreadsheet or GIS
+    // writes decimal commas (`150;157,86`), else `,`. Every line has the first line's count of
+    // fields, so a decimal comma in a comma-separated file is an error at its line, never a
+    // silently different number.
+    let mut delimiter = None;
+    let mut fields = 0;
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let cells: Vec<&str> = line.split([',', ';', '\t']).map(str::trim).collect();
+        let d = *delimiter.get_or_insert_with(|| {
+            if line.contains(';') {
+                ';'
+            } else if line.contains('\t') {
+                '\t'
+            } else {
+                ','
+            }
+        });
+        let cells: Vec<String> = line
+            .split(d)
+            .map(|c| {
+                let c = c.trim();
+                // a decimal comma (only where `,` is not the delimiter): 157,86 is 157.86
+                if d != ',' && c.matches(',').count() == 1 && !c.contains('.') {
+                    c.replace(',', ".")
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect();
+        if fields == 0 {
+            fields = cells.len();
+        } else if cells.len() != fields {
+            let name_d = match d {
+                ';' => "`;`",
+                '\t' => "tabs",
+                _ => "`,`",
+            };
+            return Err(fail(
+                format!(
+                    "{name}, line {}: {} fields where the first line has {fields} (fields \
+                     separated by {name_d}, read from the first line)",
+                    k + 1,
+                    cells.len()
+                ),
+                "give every line the same columns; with decimal commas (157,86) separate the \
+                 fields by `;` or tabs",
+            ));
+        }
         let number = |i: usize| cells.get(i).is_some_and(|c| c.parse::<f64>().is_ok());
         if out.is_empty() && !header && !(number(0) && number(1)) {
             header = true;
-            picked = columns(&cells)
+            let names: Vec<&str> = cells.iter().map(String::as_str).collect();
+            picked = columns(&names)
                 .map_err(|fix| fail(format!("{name}, line {}: header `{line}`", k + 1), &fix))?;
             continue;
         }
