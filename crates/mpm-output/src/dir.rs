@@ -47,11 +47,7 @@ impl DirLock {
         std::fs::write(&mine, format!("{pid}\n"))
             .map_err(|source| OutputError::Io { path: mine.clone(), source })?;
         let locked = |holder: Option<u32>| {
-            Err(OutputError::Locked {
-                dir: dir.to_path_buf(),
-                lock: path.clone(),
-                pid: holder.unwrap_or(0),
-            })
+            Err(OutputError::Locked { dir: dir.to_path_buf(), lock: path.clone(), pid: holder })
         };
         let mut result = locked(None);
         // A few attempts: after taking over a stale lock, or when the holder ended meanwhile.

@@ -42,10 +42,11 @@ pub enum OutputError {
     OutputExists(PathBuf),
     /// another run holds the output directory (its lock file names the process).
     #[error(
-        "output directory {} is in use by another mpm run (process {pid}, lock file {}); wait \
-         for it, choose another directory with --out, or delete the lock file if no such run is \
-         active",
+        "output directory {} is in use by another mpm run ({}, lock file {}); wait for it, \
+         choose another directory with --out, or delete the lock file if no such run is active",
         dir.display(),
+        pid.map_or("a lock naming no process yet: a run may be starting, and it is taken as \
+                    stale 2 s after it was written".to_string(), |p| format!("process {p}")),
         lock.display()
     )]
     Locked {
@@ -53,8 +54,8 @@ pub enum OutputError {
         dir: PathBuf,
         /// its lock file.
         lock: PathBuf,
-        /// the holder's process id.
-        pid: u32,
+        /// the holder's process id (`None`: the lock is empty or garbled, and young).
+        pid: Option<u32>,
     },
     /// a state could not be encoded (a fault of this program, not of its input).
     #[error("{0}")]
