@@ -48,9 +48,15 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
 /// DEM in metres has such cells; 1 arc-second is 2.8e-4 degrees).
 fn geographic(path: &Path, r: &Raster) -> Result<(), DemError> {
     let file = path.display().to_string();
-    if let Ok(prj) = std::fs::read_to_string(path.with_extension("prj")) {
-        let wkt = prj.to_ascii_uppercase();
-        if wkt.contains("GEOGCS") && !wkt.contains("PROJCS") {
+    let prj = path.with_extension("prj");
+    let wkt = std::fs::metadata(&prj)
+        .is_ok_and(|m| m.file_type().is_file() && m.len() < 1 << 20)
+        .then(|| std::fs::read_to_string(&prj).ok())
+        .flatten();
+    if let Some(wkt) = wkt {
+        let wkt = wkt.to_ascii_uppercase();
+        let geographic = wkt.contains("GEOGCS") || wkt.contains("GEOGCRS");
+        if geographic && !wkt.contains("PROJCS") && !wkt.contains("PROJCRS") {
             return Err(DemError::Geographic {
                 file,
                 evidence: "its .prj declares a geographic coordinate system (GEOGCS)".into(),
@@ -60,7 +66,16 @@ fn geographic(path: &Path, r: &Raster) -> Result<(), DemError> {
     let [west, south, east, north] = r.extent();
     let cell = r.cell();
     let lon_lat = west >= -180.0 && east <= 360.0 && south >= -90.0 && north <= 90.0;
-    if cell < 1e-3 && lon_lat {
+    // and heights that rise far more than the grid is wide: metres over degrees (a laboratory
+    // scan in metres with sub-millimetre cells has a relief below its width)
+    let (low, high) = r
+        .heights()
+        .iter()
+        .filter(|&&z| z.is_finite() && Some(z) != r.nodata())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
+    let relief = high - low;
+    let width = (east - west).max(north - south);
+    if cell < 1e-3 && lon_lat && relief > 100.0 * width {
         return Err(DemError::Geographic {
             file,
             evidence: format!(

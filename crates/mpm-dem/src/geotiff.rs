@@ -105,7 +105,13 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
         .unwrap_or_default();
     // (key, value) of the directory's short values (its first four shorts are its header)
     let key = |id: u16| {
-        keys.get(4..).unwrap_or(&[]).chunks_exact(4).find(|k| k[0] == id && k[1] == 0).map(|k| k[3])
+        let count = keys.get(3).map_or(0, |&n| usize::from(n));
+        keys.get(4..)
+            .unwrap_or(&[])
+            .chunks_exact(4)
+            .take(count)
+            .find(|k| k[0] == id && k[1] == 0)
+            .map(|k| k[3])
     };
     if key(MODEL_TYPE_KEY) == Some(MODEL_TYPE_GEOGRAPHIC) {
         return Err(DemError::Geographic {

@@ -217,6 +217,11 @@ fn a_dem_in_degrees_is_refused_with_how_to_reproject() {
     std::fs::write(&asc, text).unwrap();
     let e = Raster::read(&asc).unwrap_err();
     assert!(matches!(e, DemError::Geographic { .. }) && e.to_string().contains("0.000277"), "{e}");
+    // a laboratory scan in metres, 0.5 mm cells near the origin, 2 cm of relief: read
+    let lab = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 0.0005\n\
+               0.01 0.02 0.03\n0.00 0.01 0.02\n";
+    std::fs::write(&asc, lab).unwrap();
+    assert!(Raster::read(&asc).is_ok());
     let _ = std::fs::remove_file(&path);
     let _ = std::fs::remove_file(&asc);
 }

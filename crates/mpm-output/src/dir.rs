@@ -70,17 +70,18 @@ impl DirLock {
                     break;
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = match std::fs::read_to_string(&path) {
-                        Ok(text) => text.trim().parse::<u32>().ok(),
+                    let (holder, readable) = match std::fs::read_to_string(&path) {
+                        Ok(text) => (text.trim().parse::<u32>().ok(), true),
                         // the holder ended between our attempt and the read: try again
                         Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
-                        Err(_) => None,
+                        // unreadable (another user's lock): its holder is unknown, never stale
+                        Err(_) => (None, false),
                     };
-                    // a lock to take over: naming a process that is gone, or naming none (empty
-                    // or garbled) and older than a writer needs to fill it in
+                    // a lock to take over: naming a process that is gone, or naming none (read,
+                    // but empty or garbled) and older than a writer needs to fill it in
                     let takeover = match holder {
                         Some(other) if stale(other, &path) => true,
-                        None => abandoned(&path),
+                        None => readable && abandoned(&path),
                         Some(_) => false,
                     };
                     match holder {
@@ -90,7 +91,10 @@ impl DirLock {
                                 let moved = std::fs::read_to_string(&aside)
                                     .ok()
                                     .and_then(|t| t.trim().parse::<u32>().ok());
-                                if moved != other {
+                                // (what was moved must be the lock judged stale: the same id,
+                                // or, naming none, still as old: a rename keeps the time, so a
+                                // fresh empty lock another run just made is told apart)
+                                if moved != other || (other.is_none() && !abandoned(&aside)) {
                                     // another process took the stale lock over first and this
                                     // moved its live one: put it back
                                     let _ = std::fs::rename(&aside, &path);

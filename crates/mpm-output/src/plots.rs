@@ -230,14 +230,19 @@ fn panel(
 }
 
 /// a tick label readable at any magnitude: plain with at most three decimals between 0.01 and
-/// 10 000, else in scientific notation (a residual of 3e8 J/m is `3.0e8`, not `300000000.0`
+/// 10 000, else in scientific notation (a residual of 3e8 J/m is `3e8`, not `300000000.0`
 /// cut by the label area).
 fn tick(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 {
         "0".into()
     } else if !(1e-2..1e4).contains(&a) {
-        format!("{v:.1e}")
+        // three decimals of mantissa, trailing zeros off: 10 000, 10 500, 11 000 read 1e4,
+        // 1.05e4, 1.1e4 (one decimal made two of them 1.1e4)
+        let s = format!("{v:.3e}");
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        format!("{mantissa}e{exponent}")
     } else {
         let s = format!("{v:.3}");
         s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -352,7 +357,11 @@ mod tests {
         assert_eq!(tick(0.0), "0");
         assert_eq!(tick(0.25), "0.25");
         assert_eq!(tick(1500.0), "1500");
-        assert_eq!(tick(-3.0e8), "-3.0e8");
+        assert_eq!(tick(-3.0e8), "-3e8");
+        assert_eq!(
+            (tick(1.0e4), tick(1.05e4), tick(1.1e4)),
+            ("1e4".into(), "1.05e4".into(), "1.1e4".into())
+        );
         assert_eq!(tick(2.5e-5), "2.5e-5");
         for v in [1e-300, 3.7e-7, 0.0123, 12.5, 9999.0, 1e12, -4.4e20] {
             assert!(tick(v).len() <= 8, "{v}: {}", tick(v));

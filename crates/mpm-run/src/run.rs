@@ -151,21 +151,37 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     // the folder's own scene: a checkpoint copied in from another run would continue that run
     // here and leave a folder of two runs' files
     let written = dir.join("scene.toml");
-    match std::fs::read_to_string(&written) {
-        Ok(text) if text != c.scene_text => {
+    // (line endings and trailing blanks an editor or git may change do not count)
+    let same = |a: &str, b: &str| a.lines().map(str::trim_end).eq(b.lines().map(str::trim_end));
+    match std::fs::metadata(&written).map(|m| m.file_type().is_file()) {
+        Ok(true) => {
+            let text = std::fs::read_to_string(&written)
+                .map_err(|source| OutputError::Io { path: written.clone(), source })?;
+            if !same(&text, &c.scene_text) {
+                return Err(RunError::Output(OutputError::Checkpoint {
+                    path,
+                    reason: format!(
+                        "its scene ({}) is not this folder's {}: a checkpoint copied from \
+                         another run, or an edited scene.toml. Resume the folder the checkpoint \
+                         came from, run the scene again, or, if only scene.toml was edited, \
+                         delete it (resume writes it again from the checkpoint)",
+                        c.origin,
+                        written.display()
+                    ),
+                }));
+            }
+        }
+        Ok(false) => {
             return Err(RunError::Output(OutputError::Checkpoint {
                 path,
-                reason: format!(
-                    "it is the checkpoint of another scene ({}) than this folder's {}: resume \
-                     the folder the checkpoint came from, or run this scene again",
-                    c.origin,
-                    written.display()
-                ),
+                reason: format!("{} is not a regular file", written.display()),
             }));
         }
-        Ok(_) => {}
         // a deleted scene.toml is written again from the checkpoint
-        Err(_) => atomic::write(&written, c.scene_text.as_bytes())?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            atomic::write(&written, c.scene_text.as_bytes())?;
+        }
+        Err(source) => return Err(RunError::Output(OutputError::Io { path: written, source })),
     }
     mpm_output::dir::layout(dir)?;
     // files the scene names (DEMs, CSV polylines) are relative to the scene file's directory

@@ -597,7 +597,7 @@ fn a_checkpoint_from_another_scene_is_refused() {
     std::fs::copy(a.join(CHECKPOINT_FILE), b.join(CHECKPOINT_FILE)).unwrap();
     let e = resume(&b, &RunOptions::default()).unwrap_err();
     assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{e}");
-    assert!(e.to_string().contains("another scene"), "{e}");
+    assert!(e.to_string().contains("copied from another run"), "{e}");
     assert_eq!(std::fs::read(b.join("scene.toml")).unwrap(), scene_b);
     std::fs::remove_dir_all(&a).unwrap();
     std::fs::remove_dir_all(&b).unwrap();

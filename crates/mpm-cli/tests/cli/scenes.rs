@@ -151,6 +151,21 @@ fn a_csv_with_decimal_commas_is_understood_or_refused_never_misread() {
     assert_eq!(scene.particle_count(), 383);
     let (a, b) = (&original.resolved().seeds, &scene.resolved().seeds);
     assert!(a.iter().zip(b).all(|(p, q)| p.position == q.position));
+    // tab-separated with an empty last column (a note): the same scene
+    let tabs: String =
+        csv.lines()
+            .map(|l| {
+                if l.starts_with('#') {
+                    l.to_string()
+                } else {
+                    format!("{}\t", l.replace(',', "\t"))
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+    std::fs::write(dir.join("valley/rupture.csv"), &tabs).unwrap();
+    let scene = mpm_scene::load_scene_str_in(&text, "valley (TSV)", &dir).unwrap();
+    assert_eq!(scene.particle_count(), 383);
     // one decimal comma in a comma-separated file: its line, not a silent (150, 157)
     let broken = csv.replacen("155,155.05292443915386", "155,155,05292443915386", 1);
     std::fs::write(dir.join("valley/rupture.csv"), &broken).unwrap();

@@ -245,8 +245,9 @@ pub(super) fn read_pairs(
     let mut delimiter = None;
     let mut fields = 0;
     for (k, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
+        // (only spaces and a CR off the line: a tab may be the delimiter of an empty edge field)
+        let line = line.trim_matches(|c| c == ' ' || c == '\r');
+        if line.trim().is_empty() || line.trim_start().starts_with('#') {
             continue;
         }
         let d = *delimiter.get_or_insert_with(|| {
