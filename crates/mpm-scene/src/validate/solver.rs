@@ -69,7 +69,7 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
                 return Err(ctx.range(
                     "solver.dt",
                     dt,
-                    "0 < dt < ∞ (s), with a Courant number ≤ 1",
+                    &format!("0 < dt < ∞ (s), with a Courant number ≤ {MAX_COURANT}"),
                     &format!(
                         "give a positive time step, or use `courant = {DEFAULT_COURANT}` instead"
                     ),
@@ -236,12 +236,15 @@ pub(super) fn first_dt(
                 "solver.dt",
                 Some(num(dt)),
                 format!(
-                    "the fixed time step gives a Courant number {courant:.3} > 1 at t = 0 \
+                    "the fixed time step gives a Courant number {courant:.3} > {MAX_COURANT} at t = 0 \
                      (particle {fastest}: wave speed + speed {} m/s, smallest cell {} m)",
                     num(signal),
                     num(min_cell)
                 ),
-                format!("dt ≤ {} s (Courant number ≤ 1, eq 13)", num(min_cell / signal)),
+                format!(
+                    "dt ≤ {} s (Courant number ≤ {MAX_COURANT}, eq 13)",
+                    num(MAX_COURANT * min_cell / signal)
+                ),
                 format!(
                     "use `dt = {}` (Courant {DEFAULT_COURANT}) or replace `dt` by \
                      `courant = {DEFAULT_COURANT}`",
