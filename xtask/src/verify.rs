@@ -5,6 +5,7 @@
 //! The solver-level cases call the drivers of the `mpm-tests` library, the same code the workspace
 //! tests assert on; the element tests call `mpm_constitutive::element_test`.
 
+mod mixed;
 mod open_core;
 
 use std::fmt::Write as _;
@@ -146,6 +147,30 @@ impl Rows {
                 f(computed),
                 f(computed),
                 format!("≤ {}", f(limit)),
+            ],
+            status(ok),
+        );
+    }
+
+    /// lower bound: computed ≥ limit (the reference is stated in words).
+    fn at_least(
+        &mut self,
+        (case, quantity): (&str, &str),
+        reference: &str,
+        source: &str,
+        computed: f64,
+        limit: f64,
+    ) {
+        let ok = computed >= limit && computed.is_finite();
+        self.push(
+            vec![
+                case.into(),
+                quantity.into(),
+                reference.into(),
+                source.into(),
+                num(computed),
+                num(computed),
+                format!("≥ {}", num(limit)),
             ],
             status(ok),
         );
@@ -450,6 +475,7 @@ pub fn run(quick: bool) -> Result<bool> {
     consistent_mass_rows(&mut rows, quick);
     manufactured_rows(&mut rows);
     geostatic_rows(&mut rows);
+    mixed::rows(&mut rows);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
     let exact = (0..=1000)
         .map(|k| k as f64 * 0.05)

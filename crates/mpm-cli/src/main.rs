@@ -101,6 +101,17 @@ enum Command {
         /// simple shear: initial isotropic stress, held vertically (Pa, negative = compression).
         #[arg(long, default_value_t = -1000.0, allow_negative_numbers = true)]
         confining_stress: f64,
+        /// test the materials of this scene (any model) instead of the paper's sand; with
+        /// --material, only those.
+        #[arg(long, value_name = "SCENE")]
+        scene: Option<String>,
+        /// with --scene: the materials to test, comma-separated (default: all its bodies').
+        #[arg(long, value_delimiter = ',', requires = "scene")]
+        material: Vec<String>,
+        /// simple shear at this engineering shear rate γ̇ (1/s), for a rate-dependent model
+        /// such as μ(I) (default: quasi-static).
+        #[arg(long)]
+        shear_rate: Option<f64>,
         /// output directory.
         #[arg(long)]
         out: PathBuf,
@@ -209,6 +220,9 @@ fn main() -> ExitCode {
             strain,
             steps,
             confining_stress,
+            scene,
+            material,
+            shear_rate,
             out,
             force,
         } => {
@@ -216,10 +230,11 @@ fn main() -> ExitCode {
                 TestKind::Uniaxial => ElementTest::Uniaxial,
                 TestKind::SimpleShear => ElementTest::SimpleShear,
             };
-            let strain = strain.unwrap_or(match test {
-                ElementTest::Uniaxial => -1e-3,
-                ElementTest::SimpleShear => 0.02,
-            });
+            let materials = match scene.as_deref().map(|s| scene_materials(s, &material)) {
+                None => Vec::new(),
+                Some(Ok(m)) => m,
+                Some(Err(code)) => return code,
+            };
             let opts = ElementTestOptions {
                 test,
                 young,
@@ -229,29 +244,62 @@ fn main() -> ExitCode {
                 dilatancy_deg: dilatancy,
                 hardening_modulus: hardening,
                 mixing,
-                strain,
+                materials,
+                shear_rate,
+                strain: strain.unwrap_or(match test {
+                    ElementTest::Uniaxial => -1e-3,
+                    ElementTest::SimpleShear => 0.02,
+                }),
                 steps,
                 confining_stress,
-                out_dir: out.clone(),
+                out_dir: out,
                 force,
             };
-            match mpm_run::run_element_test(&opts) {
-                Ok(cases) => {
-                    for c in cases {
-                        let first =
-                            c.first_yield_syy.map_or("none".into(), |v| format!("{v:.3} Pa"));
-                        println!(
-                            "{}: first yield σ_yy {first}; final σ_yy {:.3} Pa, σ_xy {:.3} Pa, ε_vol {:.4e}",
-                            c.label, c.final_syy, c.final_sxy, c.final_eps_vol
-                        );
-                    }
-                    println!("wrote {}", out.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => run_failure(&e),
-            }
+            element_test(&opts)
         }
     }
+}
+
+/// `mpm element-test`: runs the cases and prints each one's end point.
+fn element_test(opts: &ElementTestOptions) -> ExitCode {
+    match mpm_run::run_element_test(opts) {
+        Ok(cases) => {
+            for c in cases {
+                let first = c.first_yield_syy.map_or("none".into(), |v| format!("{v:.3} Pa"));
+                println!(
+                    "{}: first yield σ_yy {first}; final σ_yy {:.3} Pa, σ_xy {:.3} Pa, ε_vol {:.4e}",
+                    c.label, c.final_syy, c.final_sxy, c.final_eps_vol
+                );
+            }
+            println!("wrote {}", opts.out_dir.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => run_failure(&e),
+    }
+}
+
+/// The materials `names` (all the bodies' when empty) of the scene `name`, built.
+fn scene_materials(
+    name: &str,
+    names: &[String],
+) -> Result<Vec<(String, mpm_run::AnyModel)>, ExitCode> {
+    let scene = load(name).map_err(|e| scene_failure(&e))?;
+    let all = &scene.resolved().material_names;
+    let names = if names.is_empty() { all.as_slice() } else { names };
+    names
+        .iter()
+        .map(|n| {
+            scene.material(n).map(|m| (n.clone(), m)).ok_or_else(|| {
+                eprintln!(
+                    "error: --material {n}: {} has no material of this name used by a body \
+                     (its bodies use: {}); give one of those names",
+                    scene.origin(),
+                    all.join(", ")
+                );
+                ExitCode::from(2)
+            })
+        })
+        .collect()
 }
 
 /// `mpm check SCENE`: validates and prints what a run would do.

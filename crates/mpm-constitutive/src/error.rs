@@ -65,6 +65,18 @@ pub enum ConstitutiveError {
         /// its value.
         value: f64,
     },
+    /// the internal variables handed to a model are another model's (a composite of several
+    /// models, such as a scene's materials of several kinds, met a point whose state does not
+    /// belong to its material).
+    #[error(
+        "the material point's internal variables are those of {found}, but its material is {expected}"
+    )]
+    ForeignState {
+        /// the material's model.
+        expected: &'static str,
+        /// the model the state belongs to.
+        found: &'static str,
+    },
     /// a friction-free cone (α = 0) softened to a negative size: no stress satisfies `f ≤ 0`.
     #[error(
         "the yield surface is empty: cone size k = {k} Pa < 0 with friction coefficient alpha = 0 \

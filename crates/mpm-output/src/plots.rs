@@ -184,8 +184,8 @@ fn panel(
         .x_desc(c.x_label)
         .y_desc(c.y_label)
         .label_style(("sans-serif", 14))
-        .x_label_formatter(&|v| tick(*v))
-        .y_label_formatter(&|v| tick(*v))
+        .x_label_formatter(&|v| tick(snap(*v, x1 - x0)))
+        .y_label_formatter(&|v| tick(snap(*v, y1 - y0)))
         .axis_desc_style(("sans-serif", 16))
         .light_line_style(WHITE.mix(0.0))
         .draw()
@@ -227,6 +227,12 @@ fn panel(
             .map_err(|e| fail(&e))?;
     }
     Ok(())
+}
+
+/// a tick at `v` on an axis spanning `span`: 0 where `v` is the round-off of a zero tick (a
+/// tick at −5.55e-17 on a 1.4 m axis is the rounding of 0, not a value to print).
+fn snap(v: f64, span: f64) -> f64 {
+    if v.abs() <= 1e-9 * span.abs() { 0.0 } else { v }
 }
 
 /// a tick label readable at any magnitude: plain with at most three decimals between 0.01 and
@@ -363,6 +369,9 @@ mod tests {
             ("1e4".into(), "1.05e4".into(), "1.1e4".into())
         );
         assert_eq!(tick(2.5e-5), "2.5e-5");
+        // a zero tick's round-off on a 1.4 m axis reads 0; a small value on a small axis stays
+        assert_eq!(tick(snap(-5.551e-17, 1.4)), "0");
+        assert_eq!(tick(snap(2.5e-5, 1e-4)), "2.5e-5");
         for v in [1e-300, 3.7e-7, 0.0123, 12.5, 9999.0, 1e12, -4.4e20] {
             assert!(tick(v).len() <= 8, "{v}: {}", tick(v));
         }

@@ -2,6 +2,7 @@
 //! checkpoints a scene asks for, watches for rest, alarms, limits and interrupts, and at the end
 //! writes the final files and the summary.
 
+use std::borrow::Cow;
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::Arc;
@@ -16,7 +17,9 @@ use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
 use mpm_scene::{InitialState, InitialStateSummary, Resolved, Scene, ground_height};
-use mpm_solver::{EnergyCheck, Observer, RunEnd, Solver, SolverError, StepReport, Vector};
+use mpm_solver::{
+    EnergyCheck, Observer, Particles, RunEnd, Solver, SolverError, StepReport, Vector,
+};
 
 use mpm_output::checkpoint::{self, CheckpointFile, History};
 use mpm_output::csv::{self, EnergyRow, ProbeRow};
@@ -159,14 +162,51 @@ pub(crate) fn initial_state<M: SceneModel, S: ShapeFunctions<N>, const N: usize>
     Ok(Some(summary))
 }
 
+/// The particles the runout measures, envelopes and deposit see: all of them, or in a scene of
+/// flowing and structural materials (sand beside elastic bedrock or an obstacle,
+/// `MaterialsBuilt::flow_mask`) the flow's alone, copied at output times.
+struct Flow<'a> {
+    position: Cow<'a, [Vector]>,
+    velocity: Cow<'a, [Vector]>,
+    mass: Cow<'a, [f64]>,
+    volume: Cow<'a, [f64]>,
+    initial_position: Cow<'a, [Vector]>,
+}
+
+impl<'a> Flow<'a> {
+    fn of<St>(r: &Resolved, p: &'a Particles<St>) -> Self {
+        let Some(mask) = r.materials.flow_mask() else {
+            return Self {
+                position: Cow::Borrowed(&p.position),
+                velocity: Cow::Borrowed(&p.velocity),
+                mass: Cow::Borrowed(&p.mass),
+                volume: Cow::Borrowed(&p.volume),
+                initial_position: Cow::Borrowed(&p.initial_position),
+            };
+        };
+        let keep = |q: &usize| mask.get(usize::from(p.material[*q])).copied().unwrap_or(true);
+        fn pick<T: Copy>(v: &[T], idx: &[usize]) -> Cow<'static, [T]> {
+            Cow::Owned(idx.iter().map(|&q| v[q]).collect())
+        }
+        let idx: Vec<usize> = (0..p.len()).filter(keep).collect();
+        Self {
+            position: pick(&p.position, &idx),
+            velocity: pick(&p.velocity, &idx),
+            mass: pick(&p.mass, &idx),
+            volume: pick(&p.volume, &idx),
+            initial_position: pick(&p.initial_position, &idx),
+        }
+    }
+}
+
 /// takes the solver's current state into the envelopes.
 fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     e: &mut Envelope,
     r: &Resolved,
     solver: &Solver<M, S, N>,
 ) {
-    let p = solver.particles();
-    e.observe(solver.time(), r.spacing, [&p.position, &p.velocity], [&p.mass, &p.volume]);
+    let f = Flow::of(r, solver.particles());
+    e.observe(solver.time(), r.spacing, [&f.position, &f.velocity], [&f.mass, &f.volume]);
 }
 
 /// Why the driver stopped a run before its end time (other than an interrupt).
@@ -203,12 +243,12 @@ impl Driver<'_> {
         solver: &Solver<M, S, N>,
     ) -> RunoutMetrics {
         let r = self.scene.resolved();
-        let p = solver.particles();
+        let f = Flow::of(r, solver.particles());
         let column = r.grid.column_width();
         summary::runout(
             solver.time(),
-            [&p.position, &p.velocity],
-            &p.mass,
+            [&f.position, &f.velocity],
+            &f.mass,
             &r.ground,
             r.spacing,
             column,
@@ -409,9 +449,9 @@ impl Driver<'_> {
             runout: RunoutReport {
                 last: h.runout.last().copied().unwrap_or_default(),
                 indicators: {
-                    let p = solver.particles();
+                    let f = Flow::of(r, solver.particles());
                     // the source's top: the highest initial particle's top
-                    let crown = p
+                    let crown = f
                         .initial_position
                         .iter()
                         .copied()
@@ -423,9 +463,9 @@ impl Driver<'_> {
                 },
             },
             observed: r.output.observed.as_ref().and_then(|o| {
-                let p = solver.particles();
+                let f = Flow::of(r, solver.particles());
                 let sim =
-                    observed::simulated(&r.ground, r.grid.column_width(), r.spacing, &p.position);
+                    observed::simulated(&r.ground, r.grid.column_width(), r.spacing, &f.position);
                 let last = h.runout.last()?;
                 observed::compare(o, &sim, last.front_x, last.tail_x)
             }),
@@ -441,7 +481,7 @@ impl Driver<'_> {
     ) -> Result<(), RunError> {
         let (Some(dir), Some(e)) = (self.dir, &self.history.envelope) else { return Ok(()) };
         let r = self.scene.resolved();
-        let deposit = envelope::deposit(e, r.spacing, &solver.particles().position);
+        let deposit = envelope::deposit(e, r.spacing, &Flow::of(r, solver.particles()).position);
         let mut s = csv::ENVELOPE_HEADER.to_string();
         csv::envelope(&mut s, e);
         atomic::write(&dir.join("envelope.csv"), s.as_bytes())?;
@@ -462,9 +502,9 @@ impl Driver<'_> {
         if !self.scene.resolved().output.plots {
             return Ok(());
         }
-        let p = solver.particles();
+        let f = Flow::of(self.scene.resolved(), solver.particles());
         let deposit =
-            Deposit { positions: &p.position, initial: &p.initial_position, time: solver.time() };
+            Deposit { positions: &f.position, initial: &f.initial_position, time: solver.time() };
         Ok(report::plots(&dir.join("plots"), self.scene, &self.history, &deposit)?)
     }
 }

@@ -2,13 +2,18 @@
 //! command line, writing a CSV and PNG plots.
 //!
 //! The element tests are not a scene (there is no grid, body or time): they are reached only
-//! through this command. Several dilatancy angles and mixing parameters can be given at once;
-//! each combination is one case (one curve, one block of CSV rows).
+//! through this command. By default they drive the paper's Drucker-Prager sand, with several
+//! dilatancy angles and mixing parameters at once (each combination is one case: one curve, one
+//! block of CSV rows); given materials of a scene (any registered model, as
+//! [`mpm_scene::materials::AnyModel`]), they drive each of those instead.
 
 use std::path::PathBuf;
 
-use mpm_constitutive::element_test::{simple_shear, uniaxial_plane_strain};
-use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor};
+use mpm_constitutive::element_test::{
+    PathPoint, simple_shear, simple_shear_at_rate, uniaxial_plane_strain,
+};
+use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor, TangentModel};
+use mpm_scene::materials::AnyModel;
 
 use mpm_output::OutputError;
 
@@ -47,6 +52,11 @@ pub struct ElementTestOptions {
     pub hardening_modulus: f64,
     /// mixing parameters M, one case each.
     pub mixing: Vec<f64>,
+    /// materials to test instead of the Drucker-Prager sweep above, by name (e.g. a scene's).
+    pub materials: Vec<(String, AnyModel)>,
+    /// simple shear: the engineering shear rate γ̇ (1/s) for a rate-dependent model such as
+    /// μ(I); `None`: quasi-static.
+    pub shear_rate: Option<f64>,
     /// final strain: ε_yy (uniaxial, negative = compression) or engineering γ_xy (shear).
     pub strain: f64,
     /// load steps.
@@ -74,6 +84,44 @@ pub struct ElementCaseResult {
     pub first_yield_syy: Option<f64>,
 }
 
+/// One point of a case's path.
+struct Point {
+    step: usize,
+    strain: SymTensor,
+    stress: SymTensor,
+    eps_p_bar: f64,
+    branch: &'static str,
+}
+
+impl<S> From<PathPoint<S>> for Point {
+    fn from(p: PathPoint<S>) -> Self {
+        Self {
+            step: p.step,
+            strain: p.strain,
+            stress: p.stress,
+            eps_p_bar: p.eps_p_bar,
+            branch: p.branch,
+        }
+    }
+}
+
+/// drives `model` along the options' test.
+fn drive<M: TangentModel>(model: &M, o: &ElementTestOptions) -> Result<Vec<Point>, RunError> {
+    let s = o.confining_stress;
+    let confined = SymTensor::new(s, s, s, 0.0, 0.0, 0.0);
+    let path = match (o.test, o.shear_rate) {
+        (ElementTest::Uniaxial, _) => {
+            uniaxial_plane_strain(model, SymTensor::ZERO, o.strain, o.steps)
+        }
+        (ElementTest::SimpleShear, None) => simple_shear(model, confined, o.strain, o.steps),
+        (ElementTest::SimpleShear, Some(rate)) => {
+            simple_shear_at_rate(model, confined, o.strain, o.steps, rate)
+        }
+    }
+    .map_err(|e| RunError::Setup(format!("element test failed: {e}")))?;
+    Ok(path.into_iter().map(Point::from).collect())
+}
+
 /// Runs the cases and writes `element_test.csv` and plots into `out_dir`.
 pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>, RunError> {
     if !(o.steps >= 1 && o.steps <= 10_000_000) {
@@ -86,6 +134,13 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
         return Err(RunError::Arguments(format!(
             "--strain {} must be finite and non-zero (e.g. -1e-3 for compression, 0.05 for shear)",
             o.strain
+        )));
+    }
+    if let Some(rate) = o.shear_rate
+        && !(rate.is_finite() && rate > 0.0 && rate <= 1e6)
+    {
+        return Err(RunError::Arguments(format!(
+            "--shear-rate {rate} is out of range: give a rate 0 < γ̇ ≤ 1e6 1/s (e.g. 10)"
         )));
     }
     if !o.confining_stress.is_finite() {
@@ -104,63 +159,36 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
     );
     let mut results = Vec::new();
     let mut curves: Vec<Curve> = Vec::new();
-    let dilatancy = if o.dilatancy_deg.is_empty() { vec![0.0] } else { o.dilatancy_deg.clone() };
-    let mixing = if o.mixing.is_empty() { vec![1.0] } else { o.mixing.clone() };
-    for &psi in &dilatancy {
-        for &m in &mixing {
-            let model = DruckerPrager::new(DruckerPragerParams {
-                young: o.young,
-                poisson: o.poisson,
-                cohesion: o.cohesion,
-                friction_angle_deg: o.friction_angle_deg,
-                dilatancy_angle_deg: psi,
-                hardening_modulus: o.hardening_modulus,
-                mixing: m,
-                cone_match: ConeMatch::PlaneStrain,
-            })
-            .map_err(|e| RunError::Arguments(format!("material parameters refused: {e}")))?;
-            let path = match o.test {
-                ElementTest::Uniaxial => {
-                    uniaxial_plane_strain(&model, SymTensor::ZERO, o.strain, o.steps)
-                }
+    let mut add = |label: String, psi: String, mixing: String, path: Vec<Point>| {
+        let case = curves.len();
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for p in &path {
+            let (e, s) = (p.strain, p.stress);
+            let ev = e.trace();
+            csv.push_str(&format!(
+                "{case},{psi},{mixing},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                p.step,
+                e.xx,
+                e.yy,
+                e.zz,
+                2.0 * e.xy,
+                ev,
+                s.xx,
+                s.yy,
+                s.zz,
+                s.xy,
+                p.eps_p_bar,
+                p.branch
+            ));
+            match o.test {
+                ElementTest::Uniaxial => a.push((-e.yy, -s.yy)),
                 ElementTest::SimpleShear => {
-                    let s = o.confining_stress;
-                    simple_shear(&model, SymTensor::new(s, s, s, 0.0, 0.0, 0.0), o.strain, o.steps)
+                    a.push((2.0 * e.xy, ev));
+                    b.push((2.0 * e.xy, s.xy));
                 }
             }
-            .map_err(|e| RunError::Setup(format!("element test failed: {e}")))?;
-            let case = curves.len();
-            let label = format!("ψ = {psi}°, M = {m}");
-            let mut a = Vec::new();
-            let mut b = Vec::new();
-            for p in &path {
-                let e = p.strain;
-                let s = p.stress;
-                let ev = e.trace();
-                csv.push_str(&format!(
-                    "{case},{psi},{m},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                    p.step,
-                    e.xx,
-                    e.yy,
-                    e.zz,
-                    2.0 * e.xy,
-                    ev,
-                    s.xx,
-                    s.yy,
-                    s.zz,
-                    s.xy,
-                    p.eps_p_bar,
-                    p.branch
-                ));
-                match o.test {
-                    ElementTest::Uniaxial => a.push((-e.yy, -s.yy)),
-                    ElementTest::SimpleShear => {
-                        a.push((2.0 * e.xy, ev));
-                        b.push((2.0 * e.xy, s.xy));
-                    }
-                }
-            }
-            let last = path.last().copied().unwrap_or(path[0]);
+        }
+        if let Some(last) = path.last() {
             results.push(ElementCaseResult {
                 label: label.clone(),
                 final_syy: last.stress.yy,
@@ -168,7 +196,34 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
                 final_eps_vol: last.strain.trace(),
                 first_yield_syy: path.iter().find(|p| p.branch != "elastic").map(|p| p.stress.yy),
             });
-            curves.push((label, a, b));
+        }
+        curves.push((label, a, b));
+    };
+    if o.materials.is_empty() {
+        let dilatancy =
+            if o.dilatancy_deg.is_empty() { vec![0.0] } else { o.dilatancy_deg.clone() };
+        let mixing = if o.mixing.is_empty() { vec![1.0] } else { o.mixing.clone() };
+        for &psi in &dilatancy {
+            for &m in &mixing {
+                let model = DruckerPrager::new(DruckerPragerParams {
+                    young: o.young,
+                    poisson: o.poisson,
+                    cohesion: o.cohesion,
+                    friction_angle_deg: o.friction_angle_deg,
+                    dilatancy_angle_deg: psi,
+                    hardening_modulus: o.hardening_modulus,
+                    mixing: m,
+                    cone_match: ConeMatch::PlaneStrain,
+                })
+                .map_err(|e| RunError::Arguments(format!("material parameters refused: {e}")))?;
+                let path = drive(&model, o)?;
+                add(format!("ψ = {psi}°, M = {m}"), psi.to_string(), m.to_string(), path);
+            }
+        }
+    } else {
+        for (name, model) in &o.materials {
+            let path = drive(model, o)?;
+            add(format!("{name} ({})", model.title()), String::new(), String::new(), path);
         }
     }
     atomic::write(&csv_path, csv.as_bytes())?;

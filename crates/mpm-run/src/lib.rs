@@ -59,6 +59,7 @@ pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_elemen
 pub use error::RunError;
 pub use mpm_output::OutputError;
 pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
+pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
 // The scene library, re-exported so that a front end needs one import path.

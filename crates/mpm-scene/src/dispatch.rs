@@ -10,7 +10,7 @@ use mpm_solver::{NewParticle, Particles};
 
 use crate::error::SceneError;
 use crate::file::ShapeFunctionKind;
-pub use crate::materials::{ModelJob, SavedState, SceneModel};
+pub use crate::materials::{AnyModel, AnyState, ModelJob, SavedState, SceneModel};
 use crate::scene::{GridBuilt, Scene, Seed};
 
 /// Work generic over the model and the shape functions.

@@ -112,6 +112,8 @@ pub struct Resolved {
     pub gimp_ppc: usize,
     /// the materials the bodies use, in index order.
     pub materials: MaterialsBuilt,
+    /// the materials' names, in index order (`[materials.NAME]` keys the bodies use).
+    pub material_names: Vec<String>,
     /// the particles, bodies in file order.
     pub seeds: Vec<Seed>,
     /// the solver settings (after presets and defaults).
@@ -240,6 +242,12 @@ impl Scene {
     /// everything the run needs, derived from the file.
     pub fn resolved(&self) -> &Resolved {
         &self.r
+    }
+
+    /// the material `[materials.NAME]` a body uses, built (`None` for a name no body uses).
+    pub fn material(&self, name: &str) -> Option<crate::materials::AnyModel> {
+        let i = self.r.material_names.iter().position(|n| n == name)?;
+        self.r.materials.get(i)
     }
 
     /// the shape functions the run will use.

@@ -1,5 +1,6 @@
 //! The `mpm` binary: exit codes and what it prints.
 
+use std::path::Path;
 use std::process::Command;
 
 use crate::temp_dir;
@@ -77,6 +78,29 @@ fn element_test_writes_csv_and_plot_with_the_papers_numbers() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(dir.join("simple_shear_volume.png").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The element tests drive a scene's materials of any kind: the elastic slab of the two-model
+/// example answers plane-strain uniaxial compression with σ_yy = E/(1 − ν²) ε_yy
+/// (5e7 / 0.96 × −1e-3 = −52 083.333 Pa); a name no body uses is refused, naming those used.
+#[test]
+fn element_test_drives_the_materials_of_a_scene() {
+    let dir = temp_dir("element_scene");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/sand_on_slab.toml");
+    let scene = scene.to_str().unwrap();
+    let out = dir.to_str().unwrap();
+    let (code, text, err) = mpm(&["element-test", "uniaxial", "--scene", scene, "--out", out]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("slab (elastic): first yield σ_yy none; final σ_yy -52083.333"),
+        "{text}"
+    );
+    assert!(text.contains("sand (Drucker-Prager)"), "{text}");
+    let args = ["element-test", "uniaxial", "--scene", scene, "--material", "rock", "--out", out];
+    let (code, _, err) = mpm(&args);
+    assert_eq!(code, 2);
+    assert!(err.contains("--material rock") && err.contains("sand, slab"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -61,6 +61,7 @@ impl SceneMaterial for DruckerPrager {
     const OBJECTIVE_STRESS: bool = true;
     const PIC_FRACTION: f64 = crate::GRANULAR_PIC_FRACTION;
     const SEPARATION_DENSITY: f64 = crate::GRANULAR_SEPARATION_DENSITY;
+    const FLOWS: bool = true;
     type Spec = DruckerPragerSpec;
 
     fn build(s: DruckerPragerSpec, _density: f64) -> Result<Self, ConstitutiveError> {

@@ -22,6 +22,7 @@ impl SceneMaterial for LinearElastic {
     const OBJECTIVE_STRESS: bool = false;
     const PIC_FRACTION: f64 = 0.0;
     const SEPARATION_DENSITY: f64 = 0.0;
+    const FLOWS: bool = false;
     type Spec = ElasticSpec;
 
     fn build(spec: ElasticSpec, _density: f64) -> Result<Self, ConstitutiveError> {

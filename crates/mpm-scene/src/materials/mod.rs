@@ -22,9 +22,10 @@ mod mu_i;
 pub use drucker_prager::{ConeMatchSpec, DruckerPragerSpec};
 pub use elastic::ElasticSpec;
 
+use glam::DMat3;
 use mpm_constitutive::{
-    ConstitutiveError, ConstitutiveModel, DpPerfectState, DruckerPrager, LinearElastic, MuI,
-    TangentModel,
+    Branch, ConstitutiveError, ConstitutiveModel, DpPerfectState, DruckerPrager, LinearElastic,
+    MAX_BRANCHES, MuI, PlaneTensor, SymTensor, Tangent, TangentModel, UpdateReport,
 };
 use mpm_solver::Checkpoint;
 use serde::de::DeserializeOwned;
@@ -56,6 +57,10 @@ pub trait SceneMaterial: SceneModel {
     /// that does not track separation itself (Drucker-Prager; μ(I) has its own opening)
     /// (`mpm_solver::SolverConfig::separation_density`).
     const SEPARATION_DENSITY: f64;
+    /// whether the model's bodies are the flow (granular: their runout, envelope and deposit
+    /// are measured) or, beside a flowing model in a mixed scene, a structure it meets
+    /// (elastic bedrock, an obstacle), left out of those measures.
+    const FLOWS: bool;
     /// the table's parameters besides `kind` and `density`.
     type Spec: DeserializeOwned;
     /// builds the model from its parameters and the material's density (kg/m³); a refused
@@ -108,6 +113,60 @@ fn parse<M: SceneMaterial>(params: toml::Table, density: f64) -> Result<M, Build
     M::build(spec, density).map_err(|e| BuildError::Model(e, M::fix))
 }
 
+/// The branches of several models as one list: the shared elastic branch (index 0), then each
+/// model's other branches in registry order.
+struct BranchUnion<const K: usize> {
+    /// the names, the first `len` used.
+    names: [&'static str; MAX_BRANCHES],
+    /// how many names there are.
+    len: usize,
+    /// where model k's branch 1 lands, minus 1.
+    offsets: [u8; K],
+}
+
+impl<const K: usize> BranchUnion<K> {
+    /// the union of the models' branch lists (a build error if it exceeds [`MAX_BRANCHES`]).
+    const fn new(lists: [&'static [&'static str]; K]) -> Self {
+        let mut names = [""; MAX_BRANCHES];
+        names[0] = "elastic";
+        let (mut len, mut offsets, mut k) = (1, [0u8; K], 0);
+        while k < K {
+            offsets[k] = (len - 1) as u8;
+            let mut i = 1;
+            while i < lists[k].len() {
+                assert!(len < MAX_BRANCHES, "the registered models name too many branches");
+                names[len] = lists[k][i];
+                len += 1;
+                i += 1;
+            }
+            k += 1;
+        }
+        Self { names, len, offsets }
+    }
+
+    /// the first `L` names (`L` = `len`).
+    const fn names<const L: usize>(&self) -> [&'static str; L] {
+        assert!(L == self.len, "the branch list's length");
+        let mut out = [""; L];
+        let mut i = 0;
+        while i < L {
+            out[i] = self.names[i];
+            i += 1;
+        }
+        out
+    }
+
+    /// model `k`'s report with its branch renumbered into the union.
+    #[inline(always)]
+    fn report(&self, k: usize, mut r: UpdateReport) -> UpdateReport {
+        let i = r.branch.index();
+        if i > 0 {
+            r.branch = Branch::new(self.offsets[k] + i as u8);
+        }
+        r
+    }
+}
+
 /// Declares the registered models: the built-material enums, the checkpoint state enum and
 /// the matches over them, so that the list below is the only place a model is named.
 macro_rules! registry {
@@ -115,25 +174,201 @@ macro_rules! registry {
         models { $( $variant:ident($model:ty) ),* $(,)? }
         states { $( $state:ident($run:ty) ),* $(,)? }
     ) => {
-        /// One material, built.
+        /// One material of any registered model, built: what a `[materials.NAME]` table
+        /// becomes, and the run type of a scene whose bodies use materials of several models
+        /// (sand on elastic bedrock). Each point is updated by its own material's model through
+        /// a `match` on this enum (static dispatch, no virtual call); particles are stored in
+        /// body order, so a material's points are contiguous and the branch is predicted.
         #[derive(Clone, Debug)]
-        pub(crate) enum Built {
-            $( $variant($model), )*
+        pub enum AnyModel {
+            $(
+                #[doc = concat!("a material of the model `", stringify!($model), "`.")]
+                $variant($model),
+            )*
         }
 
-        /// The materials a scene's bodies use, built, all of one model, in index order.
+        /// The internal variables of a point of an [`AnyModel`] material: its own model's.
+        #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum AnyState {
+            $(
+                #[doc = concat!("the state of a point of `", stringify!($model), "`.")]
+                $variant(<$model as ConstitutiveModel>::State),
+            )*
+        }
+
+        /// The registry position of each model (the index into [`ANY_BRANCHES`]' offsets).
+        #[derive(Clone, Copy)]
+        #[repr(u8)]
+        enum Position {
+            $( $variant, )*
+        }
+
+        /// The branch names of [`AnyModel`] (every model's, its elastic branch shared) and
+        /// where each model's plastic branches start.
+        const ANY_BRANCHES: BranchUnion<{ [$( stringify!($variant) ),*].len() }> =
+            BranchUnion::new([$( <$model as ConstitutiveModel>::BRANCHES ),*]);
+
+        /// The branch names of [`AnyModel`].
+        const ANY_BRANCH_NAMES: [&str; ANY_BRANCHES.len] = ANY_BRANCHES.names();
+
+        impl Default for AnyState {
+            /// the state of the first registered model (never used: a point's state comes from
+            /// its material's [`ConstitutiveModel::initial_state`]).
+            fn default() -> Self {
+                [$( AnyState::$variant(Default::default()) ),*][0]
+            }
+        }
+
+        impl AnyState {
+            /// the model the state belongs to, for messages.
+            fn title(&self) -> &'static str {
+                match self {
+                    $( AnyState::$variant(_) => <$model as SceneMaterial>::TITLE, )*
+                }
+            }
+        }
+
+        impl ConstitutiveModel for AnyModel {
+            type State = AnyState;
+            const IS_PLASTIC: bool = false $( || <$model as ConstitutiveModel>::IS_PLASTIC )*;
+            const BRANCHES: &'static [&'static str] = &ANY_BRANCH_NAMES;
+            const WAVE_SPEED_VARIES: bool =
+                false $( || <$model as ConstitutiveModel>::WAVE_SPEED_VARIES )*;
+
+            fn initial_state(&self) -> AnyState {
+                match self {
+                    $( AnyModel::$variant(m) => AnyState::$variant(ConstitutiveModel::initial_state(m)), )*
+                }
+            }
+
+            fn p_wave_modulus(&self, state: &AnyState) -> f64 {
+                match (self, state) {
+                    $( (AnyModel::$variant(m), AnyState::$variant(s)) => ConstitutiveModel::p_wave_modulus(m, s), )*
+                    // a foreign state is refused by the next update; its material's initial
+                    // stiffness keeps the time step meaningful until then.
+                    #[allow(unreachable_patterns)]
+                    _ => self.p_wave_modulus(&self.initial_state()),
+                }
+            }
+
+            fn stored_energy_density(&self, sigma: &SymTensor, state: &AnyState) -> f64 {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => {
+                            ConstitutiveModel::stored_energy_density(m, sigma, s)
+                        }
+                    )*
+                    #[allow(unreachable_patterns)]
+                    _ => self.stored_energy_density(sigma, &self.initial_state()),
+                }
+            }
+
+            fn update(
+                &self,
+                sigma: &mut SymTensor,
+                state: &mut AnyState,
+                d_eps: &SymTensor,
+                dt: f64,
+            ) -> Result<UpdateReport, ConstitutiveError> {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => ConstitutiveModel::update(m, sigma, s, d_eps, dt)
+                            .map(|r| ANY_BRANCHES.report(Position::$variant as usize, r)),
+                    )*
+                    #[allow(unreachable_patterns)]
+                    (m, s) => Err(m.foreign(s)),
+                }
+            }
+
+            #[inline(always)]
+            fn update_plane(
+                &self,
+                sigma: &mut PlaneTensor,
+                state: &mut AnyState,
+                d_eps: &PlaneTensor,
+                dt: f64,
+                rotation: Option<(f64, f64)>,
+            ) -> Result<UpdateReport, ConstitutiveError> {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => ConstitutiveModel::update_plane(m, sigma, s, d_eps, dt, rotation)
+                            .map(|r| ANY_BRANCHES.report(Position::$variant as usize, r)),
+                    )*
+                    #[allow(unreachable_patterns)]
+                    (m, s) => Err(m.foreign(s)),
+                }
+            }
+
+            fn rotate_state(&self, state: &mut AnyState, r: &DMat3) {
+                match (self, state) {
+                    $( (AnyModel::$variant(m), AnyState::$variant(s)) => ConstitutiveModel::rotate_state(m, s, r), )*
+                    #[allow(unreachable_patterns)]
+                    _ => {}
+                }
+            }
+
+            #[inline(always)]
+            fn rotate_state_z(&self, state: &mut AnyState, c: f64, sn: f64) {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => {
+                            ConstitutiveModel::rotate_state_z(m, s, c, sn)
+                        }
+                    )*
+                    #[allow(unreachable_patterns)]
+                    _ => {}
+                }
+            }
+
+            fn equivalent_plastic_strain(&self, state: &AnyState) -> f64 {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => {
+                            ConstitutiveModel::equivalent_plastic_strain(m, s)
+                        }
+                    )*
+                    #[allow(unreachable_patterns)]
+                    _ => 0.0,
+                }
+            }
+        }
+
+        impl TangentModel for AnyModel {
+            fn consistent_tangent(
+                &self,
+                sigma: &SymTensor,
+                state: &AnyState,
+                d_eps: &SymTensor,
+                dt: f64,
+            ) -> Result<Tangent, ConstitutiveError> {
+                match (self, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyState::$variant(s)) => {
+                            TangentModel::consistent_tangent(m, sigma, s, d_eps, dt)
+                        }
+                    )*
+                    #[allow(unreachable_patterns)]
+                    (m, s) => Err(m.foreign(s)),
+                }
+            }
+        }
+
+        /// The materials a scene's bodies use, built, in index order: of one model, run as
+        /// that model, or of several, run as [`AnyModel`].
         #[derive(Clone, Debug)]
         pub enum MaterialsBuilt {
             $(
                 #[doc = concat!("materials of the model `", stringify!($model), "`.")]
                 $variant(Vec<$model>),
             )*
+            /// materials of several models.
+            Mixed(Vec<AnyModel>),
         }
 
         /// The registered `kind` names, in registry order.
         pub const KINDS: &[&str] = &[$( <$model as SceneMaterial>::KIND ),*];
 
-        impl Built {
+        impl AnyModel {
             /// builds a material of the registered `kind` from its parameter table.
             pub(crate) fn new(
                 kind: &str,
@@ -142,79 +377,140 @@ macro_rules! registry {
             ) -> Result<Self, BuildError> {
                 $(
                     if kind == <$model as SceneMaterial>::KIND {
-                        return parse::<$model>(params, density).map(Built::$variant);
+                        return parse::<$model>(params, density).map(AnyModel::$variant);
                     }
                 )*
                 Err(BuildError::UnknownKind)
             }
 
             /// the model's `kind`.
-            pub(crate) fn kind(&self) -> &'static str {
+            pub fn kind(&self) -> &'static str {
                 match self {
-                    $( Built::$variant(_) => <$model as SceneMaterial>::KIND, )*
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::KIND, )*
                 }
             }
 
             /// the model's name in messages.
-            pub(crate) fn title(&self) -> &'static str {
+            pub fn title(&self) -> &'static str {
                 match self {
-                    $( Built::$variant(_) => <$model as SceneMaterial>::TITLE, )*
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::TITLE, )*
+                }
+            }
+        }
+
+        impl AnyModel {
+            /// the error of a point whose state is another model's.
+            fn foreign(&self, state: &AnyState) -> ConstitutiveError {
+                ConstitutiveError::ForeignState { expected: self.title(), found: state.title() }
+            }
+
+            /// the `[solver] separation_density` default of the model's scenes.
+            fn separation_density(&self) -> f64 {
+                match self {
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::SEPARATION_DENSITY, )*
+                }
+            }
+
+            /// whether the material's bodies are the flow ([`SceneMaterial::FLOWS`]).
+            pub fn flows(&self) -> bool {
+                match self {
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::FLOWS, )*
+                }
+            }
+
+            /// the `[solver] pic_fraction` default of the model's scenes.
+            fn pic_fraction(&self) -> f64 {
+                match self {
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::PIC_FRACTION, )*
+                }
+            }
+
+            /// whether `[solver] objective_stress` defaults to on for the model.
+            fn objective_stress(&self) -> bool {
+                match self {
+                    $( AnyModel::$variant(_) => <$model as SceneMaterial>::OBJECTIVE_STRESS, )*
                 }
             }
         }
 
         impl MaterialsBuilt {
-            /// the materials of one model; `Err(i)` names the first material of another model.
-            pub(crate) fn collect(first: Built, rest: Vec<Built>) -> Result<Self, usize> {
-                match first {
-                    $(
-                        Built::$variant(m) => {
-                            let mut all = vec![m];
-                            for (i, b) in rest.into_iter().enumerate() {
-                                match b {
-                                    Built::$variant(m) => all.push(m),
-                                    #[allow(unreachable_patterns)]
-                                    _ => return Err(i + 1),
-                                }
-                            }
-                            Ok(MaterialsBuilt::$variant(all))
-                        }
-                    )*
-                }
+            /// the materials, in index order: as their model's own run type when they are all
+            /// of one model, else as [`AnyModel`].
+            pub(crate) fn collect(all: Vec<AnyModel>) -> Self {
+                $(
+                    if all.iter().all(|m| matches!(m, AnyModel::$variant(_))) {
+                        let one = all.iter().filter_map(|m| match m {
+                            AnyModel::$variant(m) => Some(m.clone()),
+                            #[allow(unreachable_patterns)]
+                            _ => None,
+                        });
+                        return MaterialsBuilt::$variant(one.collect());
+                    }
+                )*
+                MaterialsBuilt::Mixed(all)
             }
 
             /// runs `job` with the concrete model (see [`SceneMaterial::run`]).
             pub fn run<J: ModelJob>(&self, job: J) -> J::Output {
                 match self {
                     $( MaterialsBuilt::$variant(m) => <$model as SceneMaterial>::run(m.clone(), job), )*
+                    MaterialsBuilt::Mixed(m) => job.run(m.clone()),
                 }
             }
 
-            /// the `kind` of the materials.
+            /// material `i` (index order) as an [`AnyModel`].
+            pub fn get(&self, i: usize) -> Option<AnyModel> {
+                match self {
+                    $( MaterialsBuilt::$variant(m) => m.get(i).cloned().map(AnyModel::$variant), )*
+                    MaterialsBuilt::Mixed(m) => m.get(i).cloned(),
+                }
+            }
+
+            /// in a scene of flowing and structural materials ([`SceneMaterial::FLOWS`]), which
+            /// materials (index order) are the flow that the runout measures; `None` when all
+            /// bodies are measured.
+            pub fn flow_mask(&self) -> Option<Vec<bool>> {
+                let MaterialsBuilt::Mixed(m) = self else { return None };
+                let mask: Vec<bool> = m.iter().map(AnyModel::flows).collect();
+                (mask.contains(&true) && mask.contains(&false)).then_some(mask)
+            }
+
+            /// the `kind` of the materials (`"mixed"` for several).
             pub fn kind(&self) -> &'static str {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::KIND, )*
+                    MaterialsBuilt::Mixed(_) => "mixed",
                 }
             }
 
-            /// the default `[solver] separation_density`.
+            /// the default `[solver] separation_density`: with several models, the largest of
+            /// theirs (a granular body's threshold; an elastic body never halves its density).
             pub fn separation_density(&self) -> f64 {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::SEPARATION_DENSITY, )*
+                    MaterialsBuilt::Mixed(m) => {
+                        m.iter().map(AnyModel::separation_density).fold(0.0, f64::max)
+                    }
                 }
             }
 
-            /// the default `[solver] pic_fraction`.
+            /// the default `[solver] pic_fraction`: with several models, the largest of theirs
+            /// (a granular body's deposit must come to rest).
             pub fn pic_fraction(&self) -> f64 {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::PIC_FRACTION, )*
+                    MaterialsBuilt::Mixed(m) => {
+                        m.iter().map(AnyModel::pic_fraction).fold(0.0, f64::max)
+                    }
                 }
             }
 
-            /// whether `[solver] objective_stress` defaults to on.
+            /// whether `[solver] objective_stress` defaults to on: with several models, when
+            /// any of theirs does.
             pub fn objective_stress(&self) -> bool {
                 match self {
                     $( MaterialsBuilt::$variant(_) => <$model as SceneMaterial>::OBJECTIVE_STRESS, )*
+                    MaterialsBuilt::Mixed(m) => m.iter().any(AnyModel::objective_stress),
                 }
             }
         }
@@ -268,6 +564,7 @@ registry! {
         Plastic(DruckerPrager),
         PerfectlyPlastic(DruckerPrager<DpPerfectState>),
         MuI(MuI),
+        Mixed(AnyModel),
     }
 }
 
@@ -295,5 +592,82 @@ impl MaterialsBuilt {
             }
         }
         self.run(Bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mpm_constitutive::PlaneTensor;
+
+    /// a material of `kind` from its table's text (besides `kind`).
+    fn material(kind: &str, table: &str, density: f64) -> AnyModel {
+        AnyModel::new(kind, toml::from_str(table).unwrap(), density)
+            .unwrap_or_else(|_| panic!("{kind} does not build"))
+    }
+
+    fn sand() -> AnyModel {
+        let dp = "young = 2e6\npoisson = 0.3\ncohesion = 0.0\nfriction_angle_deg = 30.0";
+        material("drucker_prager", dp, 1600.0)
+    }
+
+    fn beads() -> AnyModel {
+        let mu = "young = 2e6\npoisson = 0.3\nmu_s = 0.38\nmu_2 = 0.64\ni0 = 0.28\n\
+                  grain_diameter = 0.5e-3\ngrain_density = 2450.0";
+        material("mu_i", mu, 1470.0)
+    }
+
+    /// The composite names each model's branches once, the elastic one shared, and a point's
+    /// report names the branch its own model took.
+    #[test]
+    fn a_mixed_run_reports_each_models_own_branches() {
+        assert_eq!(AnyModel::BRANCHES, ["elastic", "cone", "apex", "flowing", "separated"]);
+        let (sand, beads) = (sand(), beads());
+        let confined = PlaneTensor::new(-1e3, -1e3, -1e3, 0.0);
+        // a large shear pushes both past yield
+        let shear = PlaneTensor::new(0.0, 0.0, 0.0, 1e-2);
+        for (m, expected) in [(&sand, "cone"), (&beads, "flowing")] {
+            let (mut sigma, mut state) = (confined, m.initial_state());
+            let r = m.update_plane(&mut sigma, &mut state, &shear, 1e-3, None).unwrap();
+            assert_eq!(AnyModel::BRANCHES[r.branch.index()], expected, "{}", m.title());
+            // the same update of the model alone: the composite adds no arithmetic
+            let (mut alone, mut alone_state) = (confined, m.initial_state());
+            match (m, &mut alone_state) {
+                (AnyModel::DruckerPrager(dp), AnyState::DruckerPrager(s)) => {
+                    dp.update_plane(&mut alone, s, &shear, 1e-3, None).unwrap();
+                }
+                (AnyModel::MuI(mu), AnyState::MuI(s)) => {
+                    mu.update_plane(&mut alone, s, &shear, 1e-3, None).unwrap();
+                }
+                _ => unreachable!(),
+            }
+            assert_eq!((sigma, state), (alone, alone_state));
+        }
+    }
+
+    /// A point whose state is another model's is refused with both models named, never
+    /// updated by the wrong law.
+    #[test]
+    fn a_foreign_state_is_an_error_naming_both_models() {
+        let (sand, beads) = (sand(), beads());
+        let (mut sigma, mut state) = (PlaneTensor::ZERO, beads.initial_state());
+        let e =
+            sand.update_plane(&mut sigma, &mut state, &PlaneTensor::ZERO, 1e-3, None).unwrap_err();
+        assert!(matches!(e, ConstitutiveError::ForeignState { .. }), "{e}");
+        let text = e.to_string();
+        assert!(text.contains(sand.title()) && text.contains(beads.title()), "{text}");
+    }
+
+    /// Materials of one model run as that model; several, as the composite.
+    #[test]
+    fn materials_of_one_model_keep_their_own_run_type() {
+        let one = MaterialsBuilt::collect(vec![sand(), sand()]);
+        assert!(matches!(one, MaterialsBuilt::DruckerPrager(ref v) if v.len() == 2));
+        let both = MaterialsBuilt::collect(vec![sand(), beads()]);
+        assert_eq!(both.kind(), "mixed");
+        assert_eq!(both.state_bytes(), std::mem::size_of::<AnyState>());
+        // the granular defaults of the sand hold for the mixed scene
+        assert_eq!(both.pic_fraction(), one.pic_fraction());
+        assert!(both.separation_density() > 0.0 && both.objective_stress());
     }
 }

@@ -16,6 +16,7 @@ impl SceneMaterial for MuI {
     /// compaction closes it), which a density threshold on top would only blur (measured: the
     /// example column's front then crept by 2 cm over 0.7 s after it had stopped).
     const SEPARATION_DENSITY: f64 = 0.0;
+    const FLOWS: bool = true;
     type Spec = MuIParams;
 
     fn build(s: MuIParams, density: f64) -> Result<Self, ConstitutiveError> {

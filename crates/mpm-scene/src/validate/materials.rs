@@ -8,13 +8,13 @@ use mpm_constitutive::ConstitutiveError;
 use super::{Ctx, describe, finite_pos, join, num};
 use crate::error::SceneError;
 use crate::file::SceneFile;
-use crate::materials::{BuildError, Built, KINDS, MaterialsBuilt};
+use crate::materials::{AnyModel, BuildError, KINDS, MaterialsBuilt};
 
 /// Builds every declared material, by name.
 pub(super) fn build<'a>(
     ctx: &Ctx<'_>,
     f: &'a SceneFile,
-) -> Result<BTreeMap<&'a str, Built>, SceneError> {
+) -> Result<BTreeMap<&'a str, AnyModel>, SceneError> {
     if f.materials.is_empty() {
         return Err(ctx.err(
             "materials",
@@ -73,7 +73,7 @@ pub(super) fn build<'a>(
         let mut params = m.0.clone();
         params.remove("kind");
         params.remove("density");
-        let material = Built::new(kind, params, density).map_err(|e| match e {
+        let material = AnyModel::new(kind, params, density).map_err(|e| match e {
             BuildError::UnknownKind => ctx.err(
                 &p("kind"),
                 Some(format!("\"{kind}\"")),
@@ -101,65 +101,42 @@ pub(super) fn build<'a>(
 }
 
 /// The materials the bodies use, in name order (a body's material index is its position here),
-/// all of one model: (materials, their names).
+/// of one model or of several: (materials, their names).
 pub(super) fn select<'a>(
     ctx: &Ctx<'_>,
     f: &'a SceneFile,
-    built: &BTreeMap<&'a str, Built>,
+    built: &BTreeMap<&'a str, AnyModel>,
 ) -> Result<(MaterialsBuilt, Vec<&'a str>), SceneError> {
     let mut used: Vec<&str> = Vec::new();
-    let mut first: Option<(&Built, usize)> = None;
     for (b, body) in f.bodies.iter().enumerate() {
-        let path = format!("bodies[{b}].material");
-        let Some(m) = built.get(body.material.as_str()) else {
+        if !built.contains_key(body.material.as_str()) {
             let names: Vec<String> = f.materials.keys().map(|n| format!("\"{n}\"")).collect();
             return Err(ctx.err(
-                &path,
+                &format!("bodies[{b}].material"),
                 Some(format!("\"{}\"", body.material)),
                 "no material of this name",
                 format!("one of {}", names.join(", ")),
                 format!("define [materials.{}] or use a defined name", body.material),
             ));
-        };
-        match first {
-            Some((m0, b0)) if m0.kind() != m.kind() => {
-                return Err(ctx.err(
-                    &path,
-                    Some(format!("\"{}\"", body.material)),
-                    format!(
-                        "this body is {} but bodies[{b0}] is {}: a run uses one constitutive \
-                         model for all bodies, so bodies of different models cannot be mixed \
-                         in one scene",
-                        m.title(),
-                        m0.title()
-                    ),
-                    "all bodies of a scene with materials of one kind",
-                    "give every body a material of the same kind (or run the bodies in \
-                     separate scenes)",
-                ));
-            }
-            None => first = Some((m, b)),
-            _ => {}
         }
         if !used.contains(&body.material.as_str()) {
             used.push(body.material.as_str());
         }
     }
     used.sort_unstable();
-    let mut chosen = used.iter().filter_map(|n| built.get(n).cloned());
-    let materials = chosen.next().and_then(|m| MaterialsBuilt::collect(m, chosen.collect()).ok());
-    let Some(materials) = materials else {
-        // `bodies::count` refuses a scene without bodies, and bodies of two models are refused
-        // above: this is a guard, not a path a scene can take.
+    if used.is_empty() {
+        // `bodies::count` refuses a scene without bodies: this is a guard, not a path a scene
+        // can take.
         return Err(ctx.err(
             "bodies",
             None,
-            "the bodies use no material of one model",
-            "at least one [[bodies]] table, all with materials of one kind",
+            "the scene has no body",
+            "at least one [[bodies]] table",
             "add a [[bodies]] table with a defined material",
         ));
-    };
-    Ok((materials, used))
+    }
+    let chosen = used.iter().filter_map(|n| built.get(n).cloned()).collect();
+    Ok((MaterialsBuilt::collect(chosen), used))
 }
 
 /// A value the model refused, located at its field.

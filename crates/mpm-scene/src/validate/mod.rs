@@ -6,9 +6,9 @@
 //! first Δt → initial state → output; each section has its module. The first problem found is reported; nothing
 //! runs until the whole scene is consistent.
 //!
-//! A scene uses one constitutive model for all bodies (the solver is generic over it, with no
-//! per-particle dispatch): a scene whose bodies use materials of two models (e.g. elastic and
-//! Drucker-Prager) is refused with an error that says so.
+//! The solver is generic over the constitutive model: a scene whose materials are all of one
+//! model runs as that model; one whose bodies use several (sand on elastic bedrock) runs as
+//! [`crate::materials::AnyModel`], each particle updated by its own material's model.
 
 mod bodies;
 mod boundaries;
@@ -314,6 +314,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         shape_function,
         gimp_ppc,
         materials,
+        material_names: used.iter().map(|n| n.to_string()).collect(),
         seeds,
         config,
         end_time,
