@@ -103,6 +103,11 @@ pub const TANGENT_FLOOR: Real = 1e-2;
 /// straight free surface 50 %, at a body's corner 25 %).
 pub const TIE_RATIO: Real = 0.05;
 
+/// A node whose mass is at most this share of the heaviest node's is not reached by any
+/// particle's weight (uGIMP's stencil includes nodes at the edge of a particle's support, with a
+/// weight of 0 or its rounding): it has no unknown in the solve.
+pub const UNREACHED_RATIO: Real = 1e-12;
+
 /// The time over which a load step is taken (s), for rate-dependent models (μ(I)): a
 /// quasi-static increment, whose strain rate is that of a 1 s loading.
 pub const QUASI_STATIC_DT: Real = 1.0;
@@ -235,7 +240,8 @@ impl NodeDofs {
     }
     /// where the node's force enters the reduced equations (the test map).
     fn rows(&self) -> &[(u32, Vector)] {
-        &self.entries[..self.rows.unwrap_or(self.entries.len())]
+        let n = self.rows.unwrap_or(self.entries.len()).min(self.entries.len());
+        &self.entries[..n]
     }
     fn push(&mut self, r: u32, c: Vector) {
         self.entries.push((r, c));

@@ -281,6 +281,10 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         let heaviest = mass.iter().copied().fold(0.0, Real::max);
         let poor =
             |i: usize| tie && matches!(holds[i], Hold::Free) && mass[i] < TIE_RATIO * heaviest;
+        // A node in a particle's stencil that its weight does not reach (uGIMP's outer nodes: a
+        // weight and gradient of 0, or their rounding) carries no stiffness and no load: not an
+        // unknown (it would be a zero row of K).
+        let empty = |i: usize| mass[i] <= UNREACHED_RATIO * heaviest;
         let mut dofs = vec![NodeDofs::default(); nodes];
         let mut next = 0u32;
         let mut new_dof = || {
@@ -289,6 +293,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         };
         for (i, (d, h)) in dofs.iter_mut().zip(&holds).enumerate() {
             match *h {
+                _ if empty(i) => {}
                 Hold::Free if poor(i) => {}
                 Hold::Free => {
                     d.push(new_dof(), Vector::X);
@@ -300,7 +305,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         }
         let mut ties = 0;
         for i in 0..nodes {
-            if !poor(i) {
+            if !poor(i) || empty(i) {
                 continue;
             }
             let at = sc.active.nodes()[i];
@@ -349,15 +354,17 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     return true;
                 }
                 let img = dofs[image as usize].clone();
+                // a ghost no weight reaches has no stiffness along its wall either
+                let own = tangential && !fixed && !empty(i);
                 if fixed {
                     dofs[i].add(&img, |c| -c);
                 } else {
-                    if tangential {
+                    if own {
                         dofs[i].push(new_dof(), normal.perp());
                     }
                     dofs[i].add(&img, |c| -normal.dot(c) * normal);
                 }
-                dofs[i].rows = Some(usize::from(tangential && !fixed));
+                dofs[i].rows = Some(usize::from(own));
                 false
             });
             if pending.len() == before {
