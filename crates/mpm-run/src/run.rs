@@ -134,8 +134,27 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
     })
 }
 
+/// The summary of a run whose checkpoint is its last state and which ended (not interrupted):
+/// resuming it would only rewrite its files with a session of no steps.
+fn finished(dir: &Path, c: &checkpoint::CheckpointFile) -> Option<RunSummary> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(dir.join("summary.json"))
+        .and_then(|f| f.take(SUMMARY_LIMIT).read_to_string(&mut text))
+        .ok()?;
+    let s: RunSummary = serde_json::from_str(&text).ok()?;
+    let (time, steps, _) = c.state.clock();
+    let last = s.steps == steps && s.simulated_time == time;
+    (last && s.status != mpm_scene::RunStatus::Interrupted).then_some(s)
+}
+
+/// The most of `summary.json` [`finished`] reads (its size is a few kilobytes).
+const SUMMARY_LIMIT: u64 = 16 << 20;
+
 /// Continues the run in `dir` from its last checkpoint to the scene's end time, writing into
 /// the same directory (`opts.out_dir` and `opts.force` are ignored).
+/// A run that has already ended is not run again: its summary is returned and nothing is
+/// written.
 pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let path = dir.join(checkpoint::FILE_NAME);
     if !path.exists() {
@@ -182,6 +201,17 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
             atomic::write(&written, c.scene_text.as_bytes())?;
         }
         Err(source) => return Err(RunError::Output(OutputError::Io { path: written, source })),
+    }
+    if let Some(done) = finished(dir, &c) {
+        opts.progress.note(&format!(
+            "{}: the run has already ended ({:?} at t = {} s after {} steps); nothing to resume, \
+             its files are left as they are (run the scene again with --force to redo it)",
+            dir.display(),
+            done.status,
+            done.simulated_time,
+            done.steps
+        ));
+        return Ok(done);
     }
     mpm_output::dir::layout(dir)?;
     // files the scene names (DEMs, CSV polylines) are relative to the scene file's directory

@@ -280,6 +280,27 @@ fn periodic_checkpoints_resume_bit_identically() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A run whose last checkpoint is its end (hostile report, item 14): `resume` says so and
+/// leaves its files alone, instead of rewriting summary.json with a session of no steps
+/// (wall time 2.5e-7 s, 0 particle-steps/s).
+#[test]
+fn resuming_a_finished_run_leaves_its_files_alone() {
+    let scene =
+        short("free_fall", 0.04).modified(|f| f.output.checkpoint_interval = Some(0.02)).unwrap();
+    let dir = temp_dir("finished");
+    let full = run_scene(&scene, &opts(&dir)).unwrap();
+    let before = std::fs::read(dir.join("summary.json")).unwrap();
+    let again = resume(&dir, &RunOptions::default()).unwrap();
+    // (read back from JSON: a timing's last bit may differ)
+    assert_eq!(
+        (again.status, again.steps, &again.state_hash),
+        (full.status, full.steps, &full.state_hash)
+    );
+    assert_eq!(again.wall_time_s, full.wall_time_s);
+    assert_eq!(std::fs::read(dir.join("summary.json")).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn an_existing_output_directory_is_refused_and_left_untouched() {
     let dir = temp_dir("exists");

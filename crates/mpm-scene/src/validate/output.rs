@@ -3,7 +3,7 @@
 use mpm_contact::{Friction, RigidSlide};
 use mpm_solver::{Boundaries, Vector};
 
-use super::{Ctx, finite_pos, pair, polyline};
+use super::{Ctx, finite_pos, num, pair, polyline};
 use crate::error::SceneError;
 use crate::file::{ObservedSpec, OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
 use crate::ground::{ground_height, segment_at};
@@ -88,7 +88,7 @@ pub(super) fn build(
         envelope: o.envelope.unwrap_or(false),
         observed: match &o.observed {
             None => None,
-            Some(spec) => Some(observed(ctx, spec, ground)?),
+            Some(spec) => Some(observed(ctx, spec, grid, ground)?),
         },
     })
 }
@@ -98,6 +98,7 @@ pub(super) fn build(
 fn observed(
     ctx: &Ctx<'_>,
     spec: &ObservedSpec,
+    grid: &GridBuilt,
     ground: &[Vector],
 ) -> Result<ObservedDeposit, SceneError> {
     let field = "output.observed.deposit";
@@ -137,6 +138,22 @@ fn observed(
         }
         // below the ground (a depletion zone in a DEM difference, a survey's noise): no deposit
         p[1] = p[1].max(0.0);
+    }
+    // a deposit no run on this grid can make (a thickness of 1e308 hung the deposit plot)
+    let height = match grid {
+        GridBuilt::Terrain(t) => t.rows() as f64 * t.row_height(),
+        GridBuilt::Regular(g) => g.upper_corner().y - g.origin().y,
+    };
+    if let Some(p) = points.iter().find(|p| p[1] > height) {
+        return Err(fail(
+            format!(
+                "{name}: the deposit is {} m thick at x = {}, more than the grid's height {} m",
+                num(p[1]),
+                num(p[0]),
+                num(height)
+            ),
+            "give thicknesses in metres (a surface as `x,surface`), or raise the grid",
+        ));
     }
     if points.iter().all(|p| p[1] <= 0.0) {
         return Err(fail(
