@@ -163,6 +163,10 @@ enum TestKind {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(message) = mpm_run::limits::memory_limit_env() {
+        eprintln!("error: {message}");
+        return ExitCode::from(2);
+    }
     match cli.command {
         Command::Run { scene, out, threads, quiet, force } => {
             let signals = signals();
@@ -329,6 +333,9 @@ fn check(scene: &str) -> ExitCode {
                 r.estimated_steps,
                 scene.end_time()
             );
+            if let Some(n) = r.initial_state_steps {
+                println!("  initial state:    gravity ramp, {n} steps or more before t = 0");
+            }
             println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
             println!(
                 "  frames:           {} (about {:.1} MB on disk)",

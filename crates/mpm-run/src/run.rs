@@ -38,6 +38,9 @@ pub struct CheckReport {
     pub initial_dt: f64,
     /// end time / initial Δt (the real count varies as speeds change).
     pub estimated_steps: u64,
+    /// steps of an explicit initial state before t = 0 (`[initial_state] method =
+    /// "gravity_ramp"`: ramp and settling time / initial Δt), if the scene asks one.
+    pub initial_state_steps: Option<u64>,
     /// heap memory of particles and per-step scratch after locating (bytes).
     pub memory_bytes: usize,
     /// particle frames that would be written.
@@ -83,6 +86,12 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
                 active_nodes: active.len(),
                 initial_dt: r.initial_dt,
                 estimated_steps: (r.end_time / r.initial_dt).ceil() as u64,
+                initial_state_steps: match r.initial_state {
+                    mpm_scene::InitialState::GravityRamp { ramp, hold } => {
+                        Some(((ramp + hold) / r.initial_dt).ceil() as u64)
+                    }
+                    _ => None,
+                },
                 memory_bytes: mpm_solver::estimated_bytes(
                     r.seeds.len(),
                     active.len(),

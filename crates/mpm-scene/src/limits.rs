@@ -52,11 +52,40 @@ pub fn available_memory() -> Option<(u64, &'static str)> {
             max.saturating_sub(used)
         });
     take(cgroup, "cgroup memory limit (/sys/fs/cgroup/memory.max)");
-    take(
-        std::env::var("MPM_MEMORY_LIMIT").ok().and_then(|v| v.trim().parse::<u64>().ok()),
-        "MPM_MEMORY_LIMIT",
-    );
+    take(memory_limit_env().ok().flatten(), "MPM_MEMORY_LIMIT");
     best
+}
+
+/// The environment variable `MPM_MEMORY_LIMIT`: `Ok(None)` when unset, else the bytes it
+/// gives (a whole number, optionally with a binary suffix K, M, G or T: `2G` is 2 GiB), or
+/// `Err` with the message a front end prints (a limit that is not understood is refused, not
+/// ignored: `abc` or `-5` used to leave the run unguarded without a word).
+pub fn memory_limit_env() -> Result<Option<u64>, String> {
+    let Some(raw) = std::env::var_os("MPM_MEMORY_LIMIT") else { return Ok(None) };
+    let text = raw.to_string_lossy();
+    parse_bytes(&text).map(Some).ok_or_else(|| {
+        format!(
+            "MPM_MEMORY_LIMIT = {text:?} is not a memory size: give a whole number of bytes, \
+             optionally with a binary suffix (e.g. 2000000000 or 2G), or unset it"
+        )
+    })
+}
+
+/// `1234`, `512M`, `2G`, `2GiB` … as bytes; `None` for anything else, zero or an overflow.
+fn parse_bytes(text: &str) -> Option<u64> {
+    let t = text.trim();
+    let digits = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
+    let (number, suffix) = t.split_at(digits);
+    let shift = match suffix.trim().trim_end_matches("iB").trim_end_matches('B') {
+        "" => 0,
+        "K" | "k" => 10,
+        "M" => 20,
+        "G" => 30,
+        "T" => 40,
+        _ => return None,
+    };
+    let n: u64 = number.parse().ok()?;
+    n.checked_mul(1u64 << shift).filter(|&b| b > 0)
 }
 
 /// the value (kB) of a `/proc/meminfo` line starting with `key`.
@@ -85,5 +114,16 @@ mod tests {
         let unlimited =
             "Max address space         unlimited            unlimited            bytes\n";
         assert_eq!(address_limit(unlimited), None);
+    }
+
+    #[test]
+    fn memory_sizes_read_as_bytes_and_nonsense_is_refused() {
+        assert_eq!(parse_bytes("2000000000"), Some(2_000_000_000));
+        assert_eq!(parse_bytes(" 2G "), Some(2 << 30));
+        assert_eq!(parse_bytes("512MiB"), Some(512 << 20));
+        assert_eq!(parse_bytes("64K"), Some(64 << 10));
+        for bad in ["abc", "-5", "", "0", "1.5G", "2X", "99999999999999999999", "20000000T"] {
+            assert_eq!(parse_bytes(bad), None, "{bad}");
+        }
     }
 }

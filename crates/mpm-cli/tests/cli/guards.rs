@@ -208,6 +208,17 @@ fn ten_million_particles_are_refused_under_a_small_memory_limit_without_allocati
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("(MPM_MEMORY_LIMIT)"));
     assert!(!dir.join("o").exists());
+    // a limit that is not a memory size is refused, not ignored (hostile report, item 15)
+    for bad in ["abc", "-5"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mpm"))
+            .args(["check", file.to_str().unwrap()])
+            .env("MPM_MEMORY_LIMIT", bad)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {err}");
+        assert!(err.contains("MPM_MEMORY_LIMIT") && err.contains("2G"), "{err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
