@@ -406,8 +406,8 @@ fn section(
     out: Option<&Path>,
     force: bool,
 ) -> ExitCode {
-    let stations =
-        mpm_dem::Raster::read(dem).and_then(|r| r.section(from, to, spacing.unwrap_or(r.cell())));
+    let stations = mpm_dem::Raster::read_within(dem, mpm_run::limits::available_memory())
+        .and_then(|r| r.section(from, to, spacing.unwrap_or(r.cell())));
     let stations = match stations {
         Ok(s) => s,
         Err(e) => {

@@ -18,12 +18,19 @@ use std::path::Path;
 
 use crate::error::DemError;
 use crate::raster::{MAX_CELLS, Raster};
+use crate::read::Budget;
 
-/// Reads the ESRI ASCII grid at `path`.
-pub fn read(path: &Path) -> Result<Raster, DemError> {
+/// Reads the ESRI ASCII grid at `path`, within `budget` bytes of memory if given.
+pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
     use std::io::Read;
     let file = path.display().to_string();
     let size = crate::read::regular_file(path)?;
+    // the text is read whole: refused before reading when it alone does not fit
+    if let Some((room, _)) = budget
+        && size > room
+    {
+        return Err(crate::read::too_big(&file, None, size, budget));
+    }
     // at most the length the file had when it was looked at (a file still growing is cut)
     let mut bytes = Vec::new();
     std::fs::File::open(path)
@@ -37,7 +44,7 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
             problem: "not text: an ESRI ASCII grid is plain text (is this a binary raster?)".into(),
         }
     })?;
-    let raster = parse(text, &file, bytes.len() as u64)?;
+    let raster = parse(text, &file, bytes.len() as u64, budget)?;
     geographic(path, &raster)?;
     Ok(raster)
 }
@@ -182,7 +189,12 @@ fn read_header<'a, I: Iterator<Item = (usize, &'a str)>>(
 }
 
 /// Parses an ASCII grid held in `text` (`bytes` long on disk), naming it `file` in errors.
-pub(crate) fn parse(text: &str, file: &str, bytes: u64) -> Result<Raster, DemError> {
+pub(crate) fn parse(
+    text: &str,
+    file: &str,
+    bytes: u64,
+    budget: Budget,
+) -> Result<Raster, DemError> {
     let header_err =
         |line: usize, problem: String| DemError::Header { file: file.into(), line, problem };
     let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).peekable();
@@ -225,6 +237,11 @@ pub(crate) fn parse(text: &str, file: &str, bytes: u64) -> Result<Raster, DemErr
                  file is wrong (truncated?)"
             ),
         });
+    }
+    // the heights beside the text already read
+    let need = declared.saturating_mul(8).saturating_add(text.len() as u64);
+    if budget.is_some_and(|(room, _)| need > room) {
+        return Err(crate::read::too_big(file, Some((cols, rows)), need, budget));
     }
     let n = declared as usize;
     let mut z = Vec::with_capacity(n);
@@ -315,12 +332,12 @@ mod tests {
                         NODATA_value -9999\n1 2 3\n4 -9999 6\n";
 
     fn err(text: &str) -> String {
-        parse(text, "t.asc", text.len() as u64).unwrap_err().to_string()
+        parse(text, "t.asc", text.len() as u64, None).unwrap_err().to_string()
     }
 
     #[test]
     fn a_grid_reads_with_its_corner_cell_and_holes() {
-        let r = parse(GOOD, "t.asc", GOOD.len() as u64).unwrap();
+        let r = parse(GOOD, "t.asc", GOOD.len() as u64, None).unwrap();
         assert_eq!(r.size(), [3, 2]);
         assert_eq!(r.extent(), [0.0, 0.0, 6.0, 4.0]);
         assert_eq!(r.at(0, 2), Some(3.0));

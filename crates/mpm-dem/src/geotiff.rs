@@ -18,6 +18,7 @@ use tiff::tags::Tag;
 
 use crate::error::DemError;
 use crate::raster::{MAX_CELLS, Raster};
+use crate::read::Budget;
 
 /// The largest compression ratio a raster's declared size may imply before it is decoded.
 const MAX_COMPRESSION: u64 = 1024;
@@ -29,8 +30,8 @@ const MODEL_TYPE_KEY: u16 = 1024;
 const MODEL_TYPE_GEOGRAPHIC: u16 = 2;
 const PIXEL_IS_POINT: u16 = 2;
 
-/// Reads the GeoTIFF at `path` (its first image).
-pub fn read(path: &Path) -> Result<Raster, DemError> {
+/// Reads the GeoTIFF at `path` (its first image), within `budget` bytes of memory if given.
+pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
     let file = path.display().to_string();
     let io = |source| DemError::Io { file: file.clone(), source };
     let problem = |p: String| DemError::GeoTiff { file: file.clone(), problem: p };
@@ -58,6 +59,11 @@ pub fn read(path: &Path) -> Result<Raster, DemError> {
     };
     let compression: u16 = d.find_tag_unsigned(Tag::Compression).map_err(tiff)?.unwrap_or(1);
     let declared = cols * rows * bits / 8;
+    // the decoded image and the heights as f64
+    let need = declared + cols * rows * 8;
+    if budget.is_some_and(|(room, _)| need > room) {
+        return Err(crate::read::too_big(&file, Some((cols, rows)), need, budget));
+    }
     if compression == 1 && declared > bytes {
         return Err(size(format!(
             "{declared} bytes of uncompressed heights, but the file has {bytes} bytes (truncated?)"

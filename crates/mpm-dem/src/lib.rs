@@ -38,3 +38,4 @@ mod read;
 
 pub use error::DemError;
 pub use raster::{MAX_CELLS, Raster, Station};
+pub use read::Budget;

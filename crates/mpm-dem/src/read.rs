@@ -23,20 +23,48 @@ pub(crate) fn regular_file(path: &Path) -> Result<u64, DemError> {
     Ok(meta.len())
 }
 
+/// The memory a read may use: (bytes, where that limit comes from, for messages), or `None`
+/// for no limit beyond [`crate::MAX_CELLS`].
+pub type Budget = Option<(u64, &'static str)>;
+
+/// The refusal of a raster that needs `need` bytes of memory beyond the `budget`.
+pub(crate) fn too_big(file: &str, size: Option<(u64, u64)>, need: u64, budget: Budget) -> DemError {
+    let (room, source) = budget.unwrap_or((0, "the limit"));
+    let problem = format!(
+        "which need about {:.0} MB of memory to read, but {:.0} MB are available ({source}): \
+         crop the raster to the area of the run (e.g. `gdal_translate -projwin`) or coarsen it",
+        need as f64 / 1e6,
+        room as f64 / 1e6
+    );
+    match size {
+        Some((cols, rows)) => DemError::Size { file: file.into(), cols, rows, problem },
+        None => DemError::Io {
+            file: file.into(),
+            source: std::io::Error::other(format!("the file is {need} bytes long, {problem}")),
+        },
+    }
+}
+
 impl Raster {
     /// Reads a raster, choosing the format by the file's extension: `.asc` is an ESRI ASCII
     /// grid, `.tif`/`.tiff` a GeoTIFF.
     pub fn read(path: &Path) -> Result<Self, DemError> {
+        Self::read_within(path, None)
+    }
+
+    /// [`read`](Self::read) refusing, before allocating, a raster that needs more memory than
+    /// `budget` (e.g. what the process may still use).
+    pub fn read_within(path: &Path, budget: Budget) -> Result<Self, DemError> {
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
-            Some("asc") => ascii::read(path),
-            Some("tif" | "tiff") => geotiff::read(path),
+            Some("asc") => ascii::read(path, budget),
+            Some("tif" | "tiff") => geotiff::read(path, budget),
             _ => Err(DemError::UnknownFormat { file: path.display().to_string() }),
         }
     }
 
     /// Parses the text of an ESRI ASCII grid; `file` names it in errors.
     pub fn parse_ascii(text: &str, file: &str) -> Result<Self, DemError> {
-        ascii::parse(text, file, text.len() as u64)
+        ascii::parse(text, file, text.len() as u64, None)
     }
 }

@@ -225,3 +225,27 @@ fn a_dem_in_degrees_is_refused_with_how_to_reproject() {
     let _ = std::fs::remove_file(&path);
     let _ = std::fs::remove_file(&asc);
 }
+
+/// A raster that does not fit in the memory the process may use is refused before its heights
+/// are allocated, with the memory it needs and what is available (a 30 M-cell ESRI grid under
+/// `ulimit -v` aborted the process: hostile report R4); within the budget it reads as without.
+#[test]
+fn a_raster_beyond_the_memory_budget_is_refused_before_allocating() {
+    let dem = sampled(|x, y| x - y, [40, 30], 1.0, [0.0, 30.0]);
+    for name in ["budget.asc", "budget.tif"] {
+        let path = temp(name);
+        if name.ends_with(".asc") {
+            mpm_dem::ascii::write(&dem, &path).unwrap();
+        } else {
+            mpm_dem::geotiff::write(&dem, &path).unwrap();
+        }
+        // 1 200 heights need 9 600 bytes as f64, beside the text or the decoded image (the
+        // ASCII text alone, ~7 kB, fits)
+        let e = Raster::read_within(&path, Some((12_000, "a test's budget"))).unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, DemError::Size { cols: 40, rows: 30, .. }), "{text}");
+        assert!(text.contains("MB of memory") && text.contains("a test's budget"), "{text}");
+        let within = Raster::read_within(&path, Some((10_000_000, "a test's budget"))).unwrap();
+        assert_eq!(within, Raster::read(&path).unwrap());
+    }
+}

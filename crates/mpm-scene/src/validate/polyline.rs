@@ -147,7 +147,8 @@ fn from_file(
                 ));
             }
             let raster =
-                Raster::read(&file_path(ctx, dem)).map_err(|e| dem_error(ctx, &field("dem"), e))?;
+                Raster::read_within(&file_path(ctx, dem), crate::limits::available_memory())
+                    .map_err(|e| dem_error(ctx, &field("dem"), e))?;
             let s =
                 raster.section(from, to, spacing).map_err(|e| dem_error(ctx, &field("dem"), e))?;
             Ok(s.iter().map(|p| [p.station, p.z]).collect())
