@@ -588,9 +588,18 @@ fn finish(
             ExitCode::from(s.status.exit_code())
         }
         Err(e) => {
-            if let RunError::Solver { summary, .. } = &e {
+            if let RunError::Solver { summary, message } = &e {
                 if !quiet {
                     print_summary(summary, out);
+                }
+                if summary.status == RunStatus::Interrupted {
+                    // a signal during the initial state: nothing to resume (the summary
+                    // above said so unless quiet)
+                    if quiet {
+                        eprintln!("mpm: {message}");
+                    }
+                    let terminated = signals.terminated.load(Ordering::SeqCst);
+                    return ExitCode::from(if terminated { 143 } else { 130 });
                 }
             }
             run_failure(&e)

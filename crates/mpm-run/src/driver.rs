@@ -631,6 +631,10 @@ impl<'a> Driver<'a> {
     ) -> (RunStatus, Option<String>) {
         let r = self.scene.resolved();
         match (result, self.stop) {
+            // (no checkpoint: the run has not started, see `finish`)
+            (Err(e @ SolverError::InitialStateInterrupted { .. }), _) => {
+                (RunStatus::Interrupted, Some(describe(e)))
+            }
             (Err(e), _) => (RunStatus::Failed, Some(describe(e))),
             (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
                 RunStatus::StepLimit,
@@ -667,7 +671,8 @@ impl<'a> Driver<'a> {
         let r = self.scene.resolved();
         // The checkpoint holds the history as an uninterrupted run has it at this step (the
         // extra row and frame of the stop below are not part of it).
-        if status == RunStatus::Interrupted {
+        // (an interrupted initial state has none: a resume would start the run without it)
+        if status == RunStatus::Interrupted && error.is_none() {
             self.write_checkpoint(solver)?;
         }
         // the final state: a last series row and frame unless this very step was recorded.

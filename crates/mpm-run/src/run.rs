@@ -332,7 +332,11 @@ impl Job for RunJob<'_> {
             }
         };
         let (initial, initial_error) = if fresh {
-            match initial_state(&mut solver, &r.initial_state, &self.opts.progress) {
+            // a signal stops the initial state too (within a Newton iteration or a ramp step)
+            solver.set_interrupt(self.opts.interrupt.clone());
+            let found = initial_state(&mut solver, &r.initial_state, &self.opts.progress);
+            solver.set_interrupt(None);
+            match found {
                 Ok(summary) => (summary, None),
                 Err(e) => (None, Some(e)),
             }

@@ -189,6 +189,16 @@ pub enum SolverError {
         /// why the last attempt failed
         cause: String,
     },
+    /// A signal stopped the initial state before it was found (see `Solver::set_interrupt`);
+    /// the particles are as they were before it.
+    #[error(
+        "the initial state ({method}) was interrupted by a signal before it was found; nothing \
+         of it was kept and there is nothing to resume: run the scene again"
+    )]
+    InitialStateInterrupted {
+        /// `"implicit"` or `"gravity_ramp"`.
+        method: &'static str,
+    },
     /// The implicit initial state is in equilibrium only with its base stuck beyond the base's
     /// friction: the body would slide as a whole.
     #[error(

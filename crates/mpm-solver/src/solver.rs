@@ -98,6 +98,9 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     /// Body force per unit mass b_p (m/s²) of each particle, added to gravity in eq 3; empty
     /// (and free) unless a caller prescribes one ([`Solver::set_body_force`]).
     pub(crate) body_force: Vec<Vector>,
+    /// Raised (by a signal handler) to stop an initial state before it is found
+    /// ([`Solver::set_interrupt`]); the explicit run is stopped by its observer instead.
+    pub(crate) interrupt: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -220,6 +223,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             next_signal: None,
             grid_mass_kept: None,
             body_force: Vec::new(),
+            interrupt: None,
         };
         // Every particle must be inside the grid before the first step; a failure here is
         // reported at the step already completed (0 for a new run).
@@ -246,6 +250,19 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             initial_stored: self.initial_stored,
             reference_density: self.reference_density.clone(),
         }
+    }
+
+    /// A flag that, once raised (by a signal handler), stops an initial state
+    /// ([`solve_geostatic`](Self::solve_geostatic), [`settle`](Self::settle)) within one Newton
+    /// iteration or one step, with [`SolverError::InitialStateInterrupted`] and the particles
+    /// as they were. The explicit run is stopped by its observer, not by this flag.
+    pub fn set_interrupt(&mut self, flag: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>) {
+        self.interrupt = flag;
+    }
+
+    /// whether the flag of [`set_interrupt`](Self::set_interrupt) is raised.
+    pub(crate) fn interrupted(&self) -> bool {
+        self.interrupt.as_ref().is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
     }
 
     /// the particles.

@@ -301,6 +301,29 @@ fn resuming_a_finished_run_leaves_its_files_alone() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A signal during the implicit initial state ends the run as interrupted at once, with no
+/// checkpoint: resuming one would start the run without its initial state (hostile report R3:
+/// the signal waited for the whole solve, 57–240 s).
+#[test]
+fn an_interrupted_initial_state_leaves_nothing_to_resume() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/geostatic_slope.toml");
+    let scene = mpm_run::load_scene_file(&path).unwrap();
+    let dir = temp_dir("interrupted_initial");
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let o = RunOptions { interrupt: Some(flag), ..opts(&dir) };
+    let err = run_scene(&scene, &o).unwrap_err();
+    let RunError::Solver { message, summary } = &err else { panic!("{err}") };
+    assert_eq!(summary.status, RunStatus::Interrupted);
+    assert_eq!(summary.steps, 0);
+    assert!(
+        message.contains("interrupted") && message.contains("run the scene again"),
+        "{message}"
+    );
+    assert!(!dir.join(CHECKPOINT_FILE).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn an_existing_output_directory_is_refused_and_left_untouched() {
     let dir = temp_dir("exists");

@@ -487,6 +487,10 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     // (a clamped target would retry the step that just failed)
                     increment = (2.0 * increment).min(nominal).min(1.0 - lambda);
                 }
+                Err(_) if self.interrupted() => {
+                    restore(self);
+                    return Err(SolverError::InitialStateInterrupted { method: "implicit" });
+                }
                 Err(Failed { cause }) => {
                     halvings += 1;
                     report.cutbacks += 1;

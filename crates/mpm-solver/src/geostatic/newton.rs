@@ -44,6 +44,9 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             if r_norm <= settings.tolerance {
                 return Ok(());
             }
+            if self.interrupted() {
+                return Err(Failed { cause: "interrupted".into() });
+            }
             // K from the tangents at the current increment.
             let correction = self.correction(dofs, shift, base_stress, base_state, work)?;
             // Backtracking on ‖R‖: the full Newton step, else halves of it; the last halving

@@ -4,9 +4,12 @@
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
 
+use std::ops::ControlFlow;
+
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::solver::Solver;
+use crate::report::{RunEnd, StepReport};
+use crate::solver::{Observer, Solver};
 
 /// What the explicit gravity ramp of [`Solver::settle`] left.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,7 +57,16 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.scratch.stencils_ahead = None;
         let own = self.config.gravity_ramp;
         self.config.gravity_ramp = ramp;
-        let end = self.run_until(ramp + hold, &mut ());
+        let end = match self.interrupt.clone() {
+            // stopped between steps by the flag (`Solver::set_interrupt`)
+            Some(flag) => self.run_until(ramp + hold, &mut Interrupt(flag)).and_then(|e| match e {
+                RunEnd::Stopped => {
+                    Err(SolverError::InitialStateInterrupted { method: "gravity_ramp" })
+                }
+                end => Ok(end),
+            }),
+            None => self.run_until(ramp + hold, &mut ()),
+        };
         self.config.gravity_ramp = own;
         if let Err(e) = end {
             *self.particles_mut() = given;
@@ -89,5 +101,18 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation = crate::energy::Dissipation::default();
         self.next_signal = None;
         self.initial_stored = self.energy().stored();
+    }
+}
+
+/// The ramp's observer: stops it once the interrupt flag is raised.
+struct Interrupt(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for Interrupt {
+    fn after_step(&mut self, _: &Solver<M, S, N>, _: &StepReport) -> ControlFlow<()> {
+        if self.0.load(std::sync::atomic::Ordering::Relaxed) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
     }
 }

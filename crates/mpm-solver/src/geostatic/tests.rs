@@ -198,3 +198,37 @@ fn the_k0_layer_with_ugimp_has_a_geostatic_state() {
     let (rest, fall) = (speed_after(true), speed_after(false));
     assert!(rest < 1e-6 * fall, "{rest} against {fall}");
 }
+
+/// A raised interrupt flag stops either initial state at its next Newton iteration or step,
+/// with the particles as they were (hostile report R3: a signal waited for the whole solve).
+#[test]
+fn an_interrupt_stops_the_initial_state_and_keeps_the_particles() {
+    let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [4, 12]).unwrap();
+    let shape = Shape::Rectangle { min: Vector::ZERO, max: Vector::new(1.0, 2.0) };
+    let config = SolverConfig {
+        boundaries: walls(Friction::Coulomb { mu: 0.0 }),
+        gravity: Vector::new(0.0, -G),
+        ..Default::default()
+    };
+    let elastic = LinearElastic::from_young_poisson(5e7, 0.3).unwrap();
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    for implicit in [true, false] {
+        let particles = particles(&shape, 0.125, ());
+        let mut s = Solver::new(Bilinear(grid), vec![elastic], particles, config.clone()).unwrap();
+        let before = s.particles().clone();
+        s.set_interrupt(Some(flag.clone()));
+        let e = if implicit {
+            s.solve_geostatic(&GeostaticSettings::default()).unwrap_err()
+        } else {
+            s.settle(0.5, 0.1).unwrap_err()
+        };
+        assert!(matches!(e, SolverError::InitialStateInterrupted { .. }), "{e}");
+        assert_eq!(s.particles(), &before);
+        assert_eq!(s.step_count(), 0);
+        // lowered, the same solver finds its state
+        s.set_interrupt(None);
+        if implicit {
+            s.solve_geostatic(&GeostaticSettings::default()).unwrap();
+        }
+    }
+}
