@@ -131,6 +131,7 @@ fn variant(e: &RowError) -> &'static str {
         SolverError::Constitutive { .. } => "Constitutive",
         SolverError::MassSolve { .. } => "MassSolve",
         SolverError::InitialState { .. } => "InitialState",
+        SolverError::InitialStateInterrupted { .. } => "InitialStateInterrupted",
         SolverError::SlidingBase { .. } => "SlidingBase",
     }
 }
