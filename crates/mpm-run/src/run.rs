@@ -41,7 +41,8 @@ pub struct CheckReport {
     /// steps of an explicit initial state before t = 0 (`[initial_state] method =
     /// "gravity_ramp"`: ramp and settling time / initial Δt), if the scene asks one.
     pub initial_state_steps: Option<u64>,
-    /// heap memory of particles and per-step scratch after locating (bytes).
+    /// heap memory of particles and per-step scratch after locating, and of the implicit initial
+    /// state's solve if the scene asks one (bytes).
     pub memory_bytes: usize,
     /// particle frames that would be written.
     pub frames: u64,
@@ -98,7 +99,13 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
                     N,
                     state,
                     apic,
-                ) as usize,
+                ) as usize
+                    + match r.initial_state {
+                        mpm_scene::InitialState::Implicit(_) => {
+                            mpm_solver::geostatic::estimated_bytes(r.seeds.len(), N) as usize
+                        }
+                        _ => 0,
+                    },
                 frames,
                 frame_bytes: frames * per_frame,
             })

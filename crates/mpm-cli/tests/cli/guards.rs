@@ -310,3 +310,37 @@ fn devices_and_directories_are_refused_not_read() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The implicit initial state's matrix is part of the memory check (hostile report R2: `check`
+/// said 65 MB for 312 k particles, the solve peaked at 1.68 GB and aborted under `ulimit -v`):
+/// the geostatic slope (12 482 particles, ~3 MB explicit, ~70 MB with its solve) is refused
+/// under 30 MB with the solve named, and accepted without the solve.
+#[test]
+fn the_implicit_solve_is_in_the_memory_check() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/geostatic_slope.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let dir = temp_dir("implicit_memory");
+    std::fs::create_dir_all(&dir).unwrap();
+    let check = |text: &str| {
+        let file = dir.join("slope.toml");
+        std::fs::write(&file, text).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_mpm"))
+            .args(["check", file.to_str().unwrap()])
+            .env("MPM_MEMORY_LIMIT", "30000000")
+            .output()
+            .unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, err) = check(&text);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("for the implicit initial state") && err.contains("gravity_ramp"),
+        "{err}"
+    );
+    let explicit = text.replace("method = \"implicit\"\nload_steps = 4", "method = \"none\"");
+    assert_ne!(explicit, text);
+    let (code, err) = check(&explicit);
+    assert_eq!(code, Some(0), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

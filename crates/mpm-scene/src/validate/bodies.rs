@@ -7,7 +7,9 @@ use mpm_solver::generate::{self, Shape};
 
 use super::{Ctx, finite_pos, num, pair};
 use crate::error::SceneError;
-use crate::file::{BodySpec, SceneFile, ShapeFunctionKind, ShapeKind, Transfer, VtkField};
+use crate::file::{
+    BodySpec, InitialStateMethod, SceneFile, ShapeFunctionKind, ShapeKind, Transfer, VtkField,
+};
 use crate::ground::segment_at;
 use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
 use crate::scene::{GridBuilt, MaterialsBuilt, Seed};
@@ -527,10 +529,15 @@ fn fits_in_memory(
     let apic = f.solver.transfer == Some(Transfer::Apic);
     let fields = f.output.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec());
     let frame = f.output.vtk_format.unwrap_or_default().frame_bytes(n, &fields);
+    // the implicit initial state's stiffness and factors, on top of the run's own memory
+    let implicit =
+        f.initial_state.as_ref().is_some_and(|s| s.method == InitialStateMethod::Implicit);
+    let solve = if implicit { mpm_solver::geostatic::estimated_bytes(n, stencil) } else { 0 };
     let need =
         mpm_solver::estimated_bytes(n, nodes.min(n.saturating_mul(stencil)), stencil, state, apic)
             + (n * std::mem::size_of::<Seed>()) as u64
-            + frame;
+            + frame
+            + solve;
     let Some((available, source)) = crate::limits::available_memory() else { return Ok(()) };
     if need > available {
         return Err(ctx.err(
@@ -538,14 +545,24 @@ fn fits_in_memory(
             None,
             format!(
                 "the scene needs about {:.0} MB for {n} particles ({:.0} B each, with the grid \
-                 and one frame being written), but only {:.0} MB are available ({source})",
+                 and one frame being written{}), but only {:.0} MB are available ({source})",
                 need as f64 / 1e6,
                 need as f64 / n.max(1) as f64,
+                if implicit {
+                    format!(", {:.0} MB of them for the implicit initial state", solve as f64 / 1e6)
+                } else {
+                    String::new()
+                },
                 available as f64 / 1e6
             ),
             format!("at most about {:.0} MB", available as f64 / 1e6),
-            "use a coarser grid, fewer particles per cell or smaller bodies, or run it on a \
-             machine with more memory",
+            if implicit {
+                "use a coarser grid or fewer particles per cell, `[initial_state] method = \
+                 \"gravity_ramp\"` (explicit, no matrix), or a machine with more memory"
+            } else {
+                "use a coarser grid, fewer particles per cell or smaller bodies, or run it on a \
+                 machine with more memory"
+            },
         ));
     }
     Ok(())
