@@ -316,6 +316,9 @@ fn check(scene: &str) -> ExitCode {
         Ok(r) => {
             let c = scene.solver_config();
             println!("{}: valid", scene.origin());
+            for w in &scene.resolved().warnings {
+                println!("  warning: {w}");
+            }
             println!("  particles:        {}", r.particles);
             println!(
                 "  grid:             {} × {} cells, {} active nodes at t = 0",

@@ -142,6 +142,9 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
         }
         None => None,
     };
+    for w in &scene.resolved().warnings {
+        opts.progress.warn(&w.to_string());
+    }
     with_pool(opts, scene.resolved().seeds.len(), |threads| {
         dispatch::dispatch(
             scene,

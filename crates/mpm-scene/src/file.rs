@@ -41,6 +41,9 @@ pub struct SceneFile {
     /// the stresses the run starts from (stress-free by default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_state: Option<InitialStateSpec>,
+    /// plausibility warnings this scene means to have, by name (`mpm check` prints the names).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub silence: Vec<String>,
 }
 
 /// How the initial stresses are found.

@@ -54,13 +54,14 @@ pub use ground::{ground_height, segment_at, surface};
 pub use scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION,
     GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
-    ResolvedOutput, Scene, Seed, StopAtRest, fnv1a,
+    ResolvedOutput, Scene, Seed, StopAtRest, Warning, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use summary::{
     DtStats, EnergyReport, InitialStateSummary, RunStatus, RunSummary, RunoutIndicators,
     RunoutMetrics, RunoutReport,
 };
+pub use validate::plausible::WARNINGS;
 pub use validate::{load_scene_str, load_scene_str_in};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]

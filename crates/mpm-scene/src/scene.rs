@@ -19,6 +19,29 @@ pub struct Scene {
     pub(crate) dir: Option<std::path::PathBuf>,
 }
 
+/// A value inside its range that is most likely a unit or convention mistake (a friction angle
+/// written as a coefficient): printed, listed in `summary.json`, never a refusal. `silence =
+/// ["NAME"]` in the scene turns one off.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning {
+    /// the warning's name, for `silence`.
+    pub name: String,
+    /// the field path it concerns.
+    pub field: String,
+    /// what is likely wrong and how to write it.
+    pub message: String,
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "`{}`: {} (if that is meant: `silence = [\"{}\"]`)",
+            self.field, self.message, self.name
+        )
+    }
+}
+
 /// The background grid, built.
 #[derive(Clone, Debug)]
 pub enum GridBuilt {
@@ -114,6 +137,8 @@ pub struct Resolved {
     pub materials: MaterialsBuilt,
     /// the materials' names, in index order (`[materials.NAME]` keys the bodies use).
     pub material_names: Vec<String>,
+    /// the plausibility warnings of the scene, less the silenced ones.
+    pub warnings: Vec<Warning>,
     /// the particles, bodies in file order.
     pub seeds: Vec<Seed>,
     /// the solver settings (after presets and defaults).

@@ -161,6 +161,9 @@ pub struct RunSummary {
     /// `mpm resume`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_state: Option<InitialStateSummary>,
+    /// the scene's plausibility warnings (`mpm check` prints them; `silence` turns one off).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// What the initial-state stage of a run did (`[initial_state]`).

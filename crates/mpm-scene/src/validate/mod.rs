@@ -16,6 +16,7 @@ mod grid;
 mod initial_state;
 mod materials;
 mod output;
+pub mod plausible;
 mod polyline;
 mod solver;
 
@@ -309,12 +310,14 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         &config.boundaries,
         config.gravity,
     )?;
+    let warnings = plausible::warnings(ctx, f, config.gravity.length())?;
     Ok(Resolved {
         grid,
         shape_function,
         gimp_ppc,
         materials,
         material_names: used.iter().map(|n| n.to_string()).collect(),
+        warnings,
         seeds,
         config,
         end_time,
