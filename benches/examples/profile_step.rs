@@ -1,7 +1,9 @@
 //! Runs a fixed number of MUSL steps of a block on a floor for profilers (callgrind, perf), which
 //! need a plain binary rather than criterion's harness: `cargo build --release -p mpm-benches
 //! --example profile_step`, then `valgrind --tool=callgrind target/release/examples/profile_step
-//! 20000 20 [WARMUP] [elastic|sand]` (the step bench's elastic body, or its Drucker-Prager sand).
+//! 20000 20 [WARMUP] [elastic|sand|sand_full|sand_any]` (the step bench's elastic body, or its
+//! Drucker-Prager sand: storing ε̄ᵖ only as `mpm run` does, the full hardening state, or the full
+//! state inside the composite model a scene of several soil models runs as).
 
 use mpm_constitutive::{ConstitutiveModel, DruckerPrager, DruckerPragerParams, LinearElastic};
 
@@ -21,7 +23,19 @@ fn main() {
                 .expect("the paper's sand is valid and does not harden");
             run(n, steps, warmup, sand);
         }
-        Some(other) => eprintln!("unknown material {other:?}: elastic or sand"),
+        Some("sand_full") => {
+            let sand = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND)
+                .expect("the paper's sand is valid");
+            run(n, steps, warmup, sand);
+        }
+        Some("sand_any") => {
+            let sand = DruckerPrager::new(DruckerPragerParams::ABE2005_DRY_SAND)
+                .expect("the paper's sand is valid");
+            run(n, steps, warmup, mpm_scene::materials::AnyModel::DruckerPrager(sand));
+        }
+        Some(other) => {
+            eprintln!("unknown material {other:?}: elastic, sand, sand_full or sand_any")
+        }
     }
 }
 

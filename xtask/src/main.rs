@@ -10,6 +10,7 @@
 //! - `extremes`: scenes at the edges of the admissible settings, each with its expected outcome
 //!   (completes within the energy bound, or stops with a named error); `target/extremes/`.
 
+mod bench;
 mod column;
 mod dem;
 mod extremes;
@@ -30,6 +31,9 @@ usage: cargo xtask <command> [options]
 commands:
   verify [--quick]   run the verification cases (--quick: the CI subset, < 3 min)
   study [--quick]    measure the speed/accuracy trade and derive the presets (--quick: fewer runs)
+  bench [--quick]    measure throughput and thread scaling into docs/performance.md
+                     (--quick: no 1 M-particle bodies; MPM_PEERS_DIR=DIR adds the side-by-side
+                     against Taichi from DIR/side_by_side.py)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
   dem                write the worked example's synthetic valley-side DEM (docs/examples/valley/)
   help               this text";
@@ -53,6 +57,7 @@ fn main() -> ExitCode {
     let result = match command.as_str() {
         "verify" => verify::run(quick),
         "study" => study::run(quick),
+        "bench" => bench::run(quick),
         "extremes" => extremes::run(),
         "dem" => dem::run(),
         "help" | "--help" | "-h" => {
