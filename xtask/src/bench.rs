@@ -55,7 +55,11 @@ pub fn run(quick: bool) -> Result<bool> {
         scaling.push(
             vec![
                 body.into(),
-                format!("{} k", n / 1000),
+                if n >= 1_000_000 {
+                    format!("{} M", n / 1_000_000)
+                } else {
+                    format!("{} k", n / 1000)
+                },
                 format!("{one:.1}"),
                 format!("{two:.1}"),
                 format!("{:.2}×", two / one),

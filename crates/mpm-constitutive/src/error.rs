@@ -7,7 +7,7 @@ use thiserror::Error;
 #[derive(Clone, Debug, PartialEq, Error)]
 pub enum ConstitutiveError {
     /// a material or loading parameter lies outside its admissible range.
-    #[error("parameter `{name}` = {value} is outside its admissible range {range}")]
+    #[error("parameter `{name}` = {} is outside its admissible range {range}", short(*value))]
     InvalidParameter {
         /// parameter name as spelled in the API (e.g. `"poisson"`).
         name: &'static str,
@@ -108,4 +108,34 @@ pub enum ConstitutiveError {
         /// load step (1-based) that failed.
         step: usize,
     },
+}
+
+/// a number for a message: as written for ordinary magnitudes, in scientific notation beyond
+/// (1e308 printed in full is 309 digits).
+fn short(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A refused value reads as written, or in scientific notation when extreme (hostile
+    /// report R9: 1e308 was printed as 309 digits).
+    #[test]
+    fn refused_values_read_short() {
+        let e = |value| {
+            ConstitutiveError::InvalidParameter { name: "i0", value, range: "0 < i0 <= 10" }
+                .to_string()
+        };
+        assert!(e(1e308).contains("`i0` = 1e308 is outside"), "{}", e(1e308));
+        assert!(e(1e-320).contains("= 1e-320 is"), "{}", e(1e-320));
+        assert!(e(0.279).contains("= 0.279 is"), "{}", e(0.279));
+        assert!(e(-5.0).contains("= -5 is"), "{}", e(-5.0));
+    }
 }

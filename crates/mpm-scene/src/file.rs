@@ -277,7 +277,6 @@ pub struct WallSpec {
     pub thickness: Option<f64>,
 }
 
-
 /// Shape functions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
