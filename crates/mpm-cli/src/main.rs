@@ -71,25 +71,25 @@ enum Command {
         /// which test.
         test: TestKind,
         /// Young's modulus E (Pa).
-        #[arg(long, default_value_t = 2.0e6)]
+        #[arg(long, default_value_t = 2.0e6, conflicts_with = "scene")]
         young: f64,
         /// Poisson's ratio ν.
-        #[arg(long, default_value_t = 0.3)]
+        #[arg(long, default_value_t = 0.3, conflicts_with = "scene")]
         poisson: f64,
         /// cohesion c (Pa).
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = 10.0, conflicts_with = "scene")]
         cohesion: f64,
         /// friction angle φ (degrees).
-        #[arg(long, default_value_t = 40.0)]
+        #[arg(long, default_value_t = 40.0, conflicts_with = "scene")]
         friction_angle: f64,
         /// dilatancy angle(s) ψ (degrees), comma-separated: one curve each.
-        #[arg(long, value_delimiter = ',', default_value = "0")]
+        #[arg(long, value_delimiter = ',', default_value = "0", conflicts_with = "scene")]
         dilatancy: Vec<f64>,
         /// plastic modulus H (Pa).
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, conflicts_with = "scene")]
         hardening: f64,
         /// mixing parameter(s) M (1 isotropic, 0 kinematic), comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "0.8")]
+        #[arg(long, value_delimiter = ',', default_value = "0.8", conflicts_with = "scene")]
         mixing: Vec<f64>,
         /// final strain: ε_yy for uniaxial [default -1e-3], engineering γ_xy for simple
         /// shear [default 0.02].

@@ -136,6 +136,13 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
             o.strain
         )));
     }
+    if o.shear_rate.is_some() && o.test == ElementTest::Uniaxial {
+        return Err(RunError::Arguments(
+            "--shear-rate applies to simple shear; the uniaxial test is strain-controlled at \
+             a quasi-static rate: drop --shear-rate or run `simple-shear`"
+                .into(),
+        ));
+    }
     if let Some(rate) = o.shear_rate
         && !(rate.is_finite() && rate > 0.0 && rate <= 1e6)
     {

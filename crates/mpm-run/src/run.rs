@@ -158,9 +158,12 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
 fn finished(dir: &Path, c: &checkpoint::CheckpointFile) -> Option<RunSummary> {
     use std::io::Read;
     let mut text = String::new();
-    std::fs::File::open(dir.join("summary.json"))
-        .and_then(|f| f.take(SUMMARY_LIMIT).read_to_string(&mut text))
-        .ok()?;
+    let path = dir.join("summary.json");
+    // (a FIFO would block the open for ever)
+    if !std::fs::metadata(&path).is_ok_and(|m| m.file_type().is_file()) {
+        return None;
+    }
+    std::fs::File::open(path).and_then(|f| f.take(SUMMARY_LIMIT).read_to_string(&mut text)).ok()?;
     let s: RunSummary = serde_json::from_str(&text).ok()?;
     let (time, steps, _) = c.state.clock();
     let last = s.steps == steps && s.simulated_time == time;
@@ -172,8 +175,9 @@ const SUMMARY_LIMIT: u64 = 16 << 20;
 
 /// Continues the run in `dir` from its last checkpoint to the scene's end time, writing into
 /// the same directory (`opts.out_dir` and `opts.force` are ignored).
-/// A run that has already ended is not run again: its summary is returned and nothing is
-/// written.
+/// A run that has already ended and whose checkpoint is its last state is not run again: its
+/// summary is returned and nothing is written. (From an earlier checkpoint, the run is run again
+/// from there, to the same bits.)
 pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let path = dir.join(checkpoint::FILE_NAME);
     if !path.exists() {

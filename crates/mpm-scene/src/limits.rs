@@ -63,6 +63,10 @@ pub fn available_memory() -> Option<(u64, &'static str)> {
 pub fn memory_limit_env() -> Result<Option<u64>, String> {
     let Some(raw) = std::env::var_os("MPM_MEMORY_LIMIT") else { return Ok(None) };
     let text = raw.to_string_lossy();
+    // `MPM_MEMORY_LIMIT=` (set to nothing) is unset, as shells and CI files write it
+    if text.trim().is_empty() {
+        return Ok(None);
+    }
     parse_bytes(&text).map(Some).ok_or_else(|| {
         format!(
             "MPM_MEMORY_LIMIT = {text:?} is not a memory size: give a whole number of bytes, \
@@ -76,9 +80,10 @@ fn parse_bytes(text: &str) -> Option<u64> {
     let t = text.trim();
     let digits = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
     let (number, suffix) = t.split_at(digits);
-    let shift = match suffix.trim().trim_end_matches("iB").trim_end_matches('B') {
+    let unit = suffix.trim().to_ascii_uppercase();
+    let shift = match unit.trim_end_matches("IB").trim_end_matches('B') {
         "" => 0,
-        "K" | "k" => 10,
+        "K" => 10,
         "M" => 20,
         "G" => 30,
         "T" => 40,
@@ -122,6 +127,7 @@ mod tests {
         assert_eq!(parse_bytes(" 2G "), Some(2 << 30));
         assert_eq!(parse_bytes("512MiB"), Some(512 << 20));
         assert_eq!(parse_bytes("64K"), Some(64 << 10));
+        assert_eq!(parse_bytes("2g"), Some(2 << 30));
         for bad in ["abc", "-5", "", "0", "1.5G", "2X", "99999999999999999999", "20000000T"] {
             assert_eq!(parse_bytes(bad), None, "{bad}");
         }

@@ -8,8 +8,8 @@
 //!    messages, whether `OBJECTIVE_STRESS` defaults on, its parameter table (a
 //!    `#[serde(deny_unknown_fields)]` struct) and how the table builds the model.
 //! 3. Add one line to the registry: `Variant(Model)` under `models`, and the run types it
-//!    stores in checkpoints under `states` (append only: a variant's position is part of the
-//!    checkpoint format).
+//!    stores in checkpoints under `states` (both lists append only: a variant's position is
+//!    part of the checkpoint format, `models` through the state of a mixed scene, `AnyState`).
 //! 4. Document its table in `docs/scene-format.md`.
 //!
 //! Nothing else changes: validation, the Δt, the run driver, checkpoints and output are

@@ -318,7 +318,7 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                 else {
                     continue;
                 };
-                if !poor(j) && !matches!(holds[j], Hold::Ghost { .. }) {
+                if !poor(j) && !empty(j) && !matches!(holds[j], Hold::Ghost { .. }) {
                     sources.push(j);
                 }
             }
