@@ -234,6 +234,12 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
         }
     }
     atomic::write(&csv_path, csv.as_bytes())?;
+    write_plots(o.test, dir, &curves)?;
+    Ok(results)
+}
+
+/// the test's plots of the cases' curves into `dir`.
+fn write_plots(test: ElementTest, dir: &std::path::Path, curves: &[Curve]) -> Result<(), RunError> {
     let series = |pick: &dyn Fn(&Curve) -> Vec<(f64, f64)>| {
         curves
             .iter()
@@ -253,7 +259,7 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
         size: (900, 560),
         equal_aspect: false,
     };
-    match o.test {
+    match test {
         ElementTest::Uniaxial => plots::chart(
             &dir.join("uniaxial.png"),
             &chart(
@@ -280,5 +286,5 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
             )?;
         }
     }
-    Ok(results)
+    Ok(())
 }

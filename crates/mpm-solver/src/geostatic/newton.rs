@@ -55,6 +55,9 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             let mut moved = 0.0;
             let mut factor = 1.0;
             for tries in 1..=6 {
+                if self.interrupted() {
+                    return Err(Failed { cause: "interrupted".into() });
+                }
                 let trial: Vec<Real> =
                     s0.iter().zip(&correction).map(|(s, d)| s + factor * d).collect();
                 match self.residual(target, dofs, f_grav, base_stress, base_state, work, &trial) {
@@ -221,6 +224,10 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
                     }
                 }
             }
+        }
+        // (a signal during the assembly is honoured before the factorisation, the longest part)
+        if self.interrupted() {
+            return Err(Failed { cause: "interrupted".into() });
         }
         let k = SparseColMat::<usize, Real>::try_new_from_triplets(unknowns, unknowns, &triplets)
             .map_err(|e| Failed { cause: format!("cannot assemble the stiffness: {e:?}") })?;
