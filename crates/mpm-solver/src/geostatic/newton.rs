@@ -129,6 +129,14 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         let sc = &self.scratch;
         let p = &mut self.particles;
         for q in 0..p.len() {
+            if q % INTERRUPT_EVERY == INTERRUPT_EVERY - 1
+                && self
+                    .interrupt
+                    .as_ref()
+                    .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+            {
+                return Err(Failed { cause: "interrupted".into() });
+            }
             let d_eps =
                 strain(&self.shape.gradients(&sc.factors[q]), &sc.node_index[q], &work.u_full);
             let model = &self.materials[usize::from(p.material[q])];
@@ -176,6 +184,9 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
             triplets.push(Triplet::new(r, r, d));
         }
         for q in 0..p.len() {
+            if q % INTERRUPT_EVERY == INTERRUPT_EVERY - 1 && self.interrupted() {
+                return Err(Failed { cause: "interrupted".into() });
+            }
             let gr = self.shape.gradients(&sc.factors[q]);
             let idx = &sc.node_index[q];
             let d_eps = strain(&gr, idx, &work.u_full);
@@ -231,10 +242,29 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         }
         let k = SparseColMat::<usize, Real>::try_new_from_triplets(unknowns, unknowns, &triplets)
             .map_err(|e| Failed { cause: format!("cannot assemble the stiffness: {e:?}") })?;
-        let lu = k.sp_lu().map_err(|e| Failed { cause: format!("singular stiffness: {e:?}") })?;
         let rhs = faer::Mat::<Real>::from_fn(unknowns, 1, |r, _| work.r[r]);
-        let x = lu.solve(&rhs);
-        let out: Vec<Real> = (0..unknowns).map(|r| x[(r, 0)]).collect();
+        let factor_and_solve = move || -> Result<Vec<Real>, String> {
+            let lu = k.sp_lu().map_err(|e| format!("singular stiffness: {e:?}"))?;
+            let x = lu.solve(&rhs);
+            Ok((0..unknowns).map(|r| x[(r, 0)]).collect())
+        };
+        let solved = match &self.interrupt {
+            None => factor_and_solve(),
+            // The factorisation cannot be stopped part-way: it runs on its own thread, and a
+            // signal is honoured within a poll while it works (the thread is left to finish
+            // and its result dropped).
+            Some(flag) => {
+                let handle = std::thread::spawn(factor_and_solve);
+                while !handle.is_finished() {
+                    if flag.load(std::sync::atomic::Ordering::Relaxed) {
+                        return Err(Failed { cause: "interrupted".into() });
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(FACTOR_POLL_MS));
+                }
+                handle.join().unwrap_or_else(|_| Err("the factorisation panicked".into()))
+            }
+        };
+        let out = solved.map_err(|cause| Failed { cause })?;
         if out.iter().any(|v| !v.is_finite()) {
             return Err(Failed {
                 cause: "the stiffness is singular (a body no boundary holds?)".into(),
@@ -385,6 +415,13 @@ impl<M: TangentModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
         (dofs, next as usize, holds, ties)
     }
 }
+
+/// The particle passes of the solve (assembly, stress update) look for a signal every this many
+/// particles (a few milliseconds of work).
+const INTERRUPT_EVERY: usize = 8192;
+
+/// How often (ms) a factorisation on its own thread is checked for its end and for a signal.
+const FACTOR_POLL_MS: u64 = 10;
 
 /// Vectors reused over the iterations.
 pub(super) struct Work {
