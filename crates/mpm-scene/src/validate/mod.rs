@@ -12,6 +12,7 @@
 
 mod bodies;
 mod boundaries;
+mod edit;
 mod grid;
 mod initial_state;
 mod materials;

@@ -1,0 +1,191 @@
+//! One field of a scene changed by its path, for scripted studies (`Scene::with_value`): the
+//! text is edited in place (comments and layout kept), then validated again as a whole, so a
+//! changed scene is refused exactly as the same file would be.
+
+use toml_edit::{DocumentMut, Item, Value};
+
+use super::load;
+use crate::error::SceneError;
+use crate::scene::Scene;
+
+/// One step of a field path: a key of a table, or an index into an array (of tables).
+#[derive(Debug, PartialEq)]
+enum Step<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+/// `materials.sand.friction_angle_deg`, `bodies[0].min`, `bodies.0.min`, `grid.cells[1]`.
+fn steps(path: &str) -> Option<Vec<Step<'_>>> {
+    let mut out = Vec::new();
+    for part in path.split('.') {
+        let (key, mut rest) = part.split_once('[').map_or((part, ""), |(k, r)| (k, r));
+        if !key.is_empty() {
+            out.push(match key.parse::<usize>() {
+                Ok(i) => Step::Index(i),
+                Err(_) => Step::Key(key),
+            });
+        } else if rest.is_empty() {
+            return None; // an empty segment: `a..b`, `.a`
+        }
+        while !rest.is_empty() {
+            let (index, after) = rest.split_once(']')?;
+            out.push(Step::Index(index.trim().parse().ok()?));
+            rest = after.strip_prefix('[').unwrap_or(after);
+            if !after.is_empty() && !after.starts_with('[') {
+                return None; // `a[0]b`
+            }
+        }
+    }
+    (!out.is_empty()).then_some(out)
+}
+
+impl Scene {
+    /// the same scene with the field at `path` set to `value`, a TOML value as written in a scene
+    /// file (`35.0`, `"musl"`, `[0.0, 1.2]`, `{ kind = "coulomb", friction_deg = 20.0 }`), and
+    /// validated again. A table on the path that the scene lacks is created; a field the format
+    /// does not have is refused by the validation, located in the edited text, whose origin
+    /// names the change.
+    ///
+    /// ```
+    /// use mpm_scene::{embedded_scene, load_scene_str};
+    ///
+    /// let flume = load_scene_str(embedded_scene("flume").unwrap(), "flume").unwrap();
+    /// let steeper = flume.with_value("materials.sand.friction_angle_deg", "35.0").unwrap();
+    /// assert!(steeper.text().contains("friction_angle_deg = 35.0"));
+    /// let e = flume.with_value("materials.sand.friction_angle_deg", "95.0").unwrap_err();
+    /// assert_eq!(e.path, "materials.sand.friction_angle_deg");
+    /// ```
+    pub fn with_value(&self, path: &str, value: &str) -> Result<Scene, SceneError> {
+        let refuse = |problem: String, fix: &str| SceneError {
+            origin: self.origin.clone(),
+            line: None,
+            column: None,
+            path: path.to_string(),
+            value: Some(value.to_string()),
+            problem,
+            admissible: String::new(),
+            fix: fix.to_string(),
+        };
+        let Some(steps) = steps(path) else {
+            return Err(refuse(
+                "not a field path".into(),
+                "name the field as in the scene file, its tables joined by dots and array \
+                 elements by their index: `materials.sand.friction_angle_deg`, `bodies[0].min`",
+            ));
+        };
+        let new = parse_value(value).ok_or_else(|| {
+            refuse(
+                "not a TOML value".into(),
+                "write the value as in a scene file: 35.0, \"musl\", true, [0.0, 1.2], \
+                 { kind = \"coulomb\", friction_deg = 20.0 }",
+            )
+        })?;
+        let mut doc: DocumentMut = self.text.parse().map_err(|e| {
+            refuse(format!("the scene's text cannot be edited: {e}"), "load the scene again")
+        })?;
+        set(doc.as_item_mut(), &steps, new).map_err(|why| {
+            refuse(why, "name a field of the scene format (docs/scene-format.md)")
+        })?;
+        let origin = format!("{} (with {path} = {value})", self.origin);
+        load(&doc.to_string(), &origin, self.dir.as_deref()).map(|mut scene| {
+            scene.origin = self.origin.clone();
+            scene
+        })
+    }
+}
+
+/// a TOML value written alone.
+fn parse_value(text: &str) -> Option<Value> {
+    let doc: DocumentMut = format!("v = {text}\n").parse().ok()?;
+    let item = doc.get("v")?.clone();
+    // `v = 1\nw = 2` would parse too: one value only
+    (doc.len() == 1).then_some(())?;
+    item.into_value().ok()
+}
+
+/// sets `steps` under `item` to `value`, creating missing tables on the way.
+fn set(item: &mut Item, steps: &[Step<'_>], value: Value) -> Result<(), String> {
+    let (first, rest) = steps.split_first().ok_or("an empty path")?;
+    match (first, item) {
+        (Step::Key(_), Item::Table(t)) => set_in_table(t, steps, value),
+        (Step::Index(i), Item::ArrayOfTables(a)) => {
+            let len = a.len();
+            let t = a.get_mut(*i).ok_or(format!("index {i} beyond the {len} tables there"))?;
+            if rest.is_empty() {
+                return Err("a whole table cannot be set: set its fields one by one".into());
+            }
+            set_in_table(t, rest, value)
+        }
+        (_, Item::Value(v)) => set_value(v, steps, value),
+        (Step::Key(k), _) => Err(format!("`{k}` is not under a table")),
+        (Step::Index(i), _) => Err(format!("[{i}] is not an index of an array")),
+    }
+}
+
+/// [`set`] under a table: the first step is a key of it.
+fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> Result<(), String> {
+    let (first, rest) = steps.split_first().ok_or("an empty path")?;
+    let Step::Key(k) = first else {
+        return Err("an index where a table's field was expected".into());
+    };
+    if rest.is_empty() {
+        t.insert(k, Item::Value(value));
+        return Ok(());
+    }
+    let next = t.entry(k).or_insert_with(|| {
+        let mut new = toml_edit::Table::new();
+        new.set_implicit(true);
+        Item::Table(new)
+    });
+    set(next, rest, value)
+}
+
+/// [`set`] inside an inline value (an inline table or an array).
+fn set_value(v: &mut Value, steps: &[Step<'_>], value: Value) -> Result<(), String> {
+    let (first, rest) = steps.split_first().ok_or("an empty path")?;
+    match (first, v) {
+        (Step::Key(k), Value::InlineTable(t)) => {
+            if rest.is_empty() {
+                t.insert(*k, value);
+                return Ok(());
+            }
+            let v =
+                t.entry(*k).or_insert_with(|| Value::InlineTable(toml_edit::InlineTable::new()));
+            set_value(v, rest, value)
+        }
+        (Step::Index(i), Value::Array(a)) => {
+            let len = a.len();
+            if *i >= len {
+                return Err(format!("index {i} beyond the {len} elements there"));
+            }
+            if rest.is_empty() {
+                a.replace(*i, value);
+                return Ok(());
+            }
+            let element = a.get_mut(*i).ok_or(format!("index {i} beyond the array"))?;
+            set_value(element, rest, value)
+        }
+        (Step::Key(k), _) => Err(format!("`{k}` is not under a table")),
+        (Step::Index(i), _) => Err(format!("[{i}] is not an index of an array")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_are_split_into_keys_and_indices() {
+        use Step::{Index, Key};
+        assert_eq!(steps("a.b"), Some(vec![Key("a"), Key("b")]));
+        assert_eq!(steps("bodies[0].min"), Some(vec![Key("bodies"), Index(0), Key("min")]));
+        assert_eq!(
+            steps("bodies.1.min[1]"),
+            Some(vec![Key("bodies"), Index(1), Key("min"), Index(1)])
+        );
+        for bad in ["", "a..b", ".a", "a[x]", "a[0]b", "a[0"] {
+            assert_eq!(steps(bad), None, "{bad}");
+        }
+    }
+}
