@@ -10,6 +10,9 @@
 //! - [`run_scene`] runs a scene with [`RunOptions`] and returns a [`RunSummary`] (also written
 //!   as `summary.json`); [`resume`] continues a run from its checkpoint bit-identically;
 //!   [`check_scene`] validates fully without stepping.
+//! - [`Simulation`] is a run advanced by its caller, step by step or to a time, with the
+//!   particles' fields, the energy ledger and checkpoints between calls (for bindings and
+//!   coupling).
 //! - [`run_element_test`] runs the constitutive element tests.
 //! - [`Progress`] receives a run's progress, warnings and reports; nothing is printed without
 //!   one.
@@ -52,6 +55,7 @@ mod error;
 mod options;
 mod progress;
 mod run;
+mod simulation;
 
 pub use progress::{Progress, ProgressSink};
 
@@ -62,6 +66,7 @@ pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
+pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation};
 // The scene library, re-exported so that a front end needs one import path.
 pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
 pub use mpm_scene::{

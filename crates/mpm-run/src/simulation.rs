@@ -1,0 +1,481 @@
+//! A run driven from outside, step by step: for bindings, coupling and custom analysis.
+//!
+//! [`Simulation`] owns a worker thread on which the scene's solver lives with its concrete model
+//! and shape-function types (chosen once by `mpm_scene::dispatch`, as for [`run_scene`]); each
+//! call sends the worker one command and waits for its answer. While it waits, the caller's
+//! `poll` runs every [`POLL`] and may ask the work to stop after its current step (a Python
+//! front end checks for Ctrl-C there), so the state is always that of a whole step.
+//!
+//! The records are those of a run without an output directory: the same initial state, energy
+//! ledger, runout series, envelopes and rest watch, so [`Simulation::summary`] is what
+//! [`run_scene`] would report at the same step.
+//!
+//! [`run_scene`]: crate::run_scene
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use mpm_grid::ShapeFunctions;
+use mpm_output::checkpoint::{self, CheckpointFile, History};
+use mpm_output::{OutputError, atomic};
+use mpm_scene::dispatch::{self, Job, SceneModel};
+use mpm_scene::{RunStatus, RunSummary, Scene};
+use mpm_solver::{EnergyLedger, Observer, RunEnd, Solver, SolverError};
+
+use crate::driver::{Driver, initial_state};
+use crate::error::RunError;
+use crate::options::RunOptions;
+
+/// How often a waiting call runs its `poll`.
+pub const POLL: Duration = Duration::from_millis(20);
+
+/// How far [`Simulation::advance`] goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Limit {
+    /// this many more steps.
+    Steps(u64),
+    /// until this simulated time (s); the last step is shortened to land on it, so a run
+    /// advanced to intermediate times takes other steps than one run in one go (whose output
+    /// times never shorten a step); [`Limit::Steps`] keeps them.
+    Time(f64),
+}
+
+/// Where an advance ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Advance {
+    /// `None` when the limit was reached; otherwise why the run stopped before it
+    /// ([`RunStatus::AtRest`], [`RunStatus::EnergyAlarm`], [`RunStatus::StepLimit`], or
+    /// [`RunStatus::Interrupted`] when `poll` asked).
+    pub stopped: Option<RunStatus>,
+    /// simulated time (s).
+    pub time: f64,
+    /// steps taken since the start.
+    pub steps: u64,
+}
+
+/// The particles' fields, copied (plane strain: 2 components a vector, stresses as xx, yy, zz,
+/// xy in Pa, tension positive).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParticleFields {
+    /// positions (m).
+    pub position: Vec<[f64; 2]>,
+    /// velocities (m/s).
+    pub velocity: Vec<[f64; 2]>,
+    /// Cauchy stresses: xx, yy, zz (out of plane), xy (Pa).
+    pub stress: Vec<[f64; 4]>,
+    /// masses (kg per m of thickness).
+    pub mass: Vec<f64>,
+    /// volumes (m² per m of thickness).
+    pub volume: Vec<f64>,
+    /// positions at the start (m).
+    pub initial_position: Vec<[f64; 2]>,
+    /// each particle's body, as numbered in the scene's `[[bodies]]`.
+    pub body: Vec<u16>,
+    /// each particle's material, in the scene's order of `[materials.*]`.
+    pub material: Vec<u16>,
+}
+
+enum Command {
+    Advance(Limit),
+    Fields,
+    Energy,
+    Summary,
+    Checkpoint(PathBuf),
+}
+
+enum Reply {
+    Ready { time: f64, steps: u64, particles: usize },
+    Advanced(Box<Result<Advance, RunError>>),
+    Fields(Box<ParticleFields>),
+    Energy(EnergyLedger),
+    Summary(Box<RunSummary>),
+    Written(Result<(), RunError>),
+    Failed(RunError),
+}
+
+/// A scene's run, advanced by the caller (see the module's documentation).
+pub struct Simulation {
+    commands: Option<Sender<Command>>,
+    replies: Receiver<Reply>,
+    worker: Option<JoinHandle<()>>,
+    interrupt: Arc<AtomicBool>,
+    time: f64,
+    steps: u64,
+    particles: usize,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("time", &self.time)
+            .field("steps", &self.steps)
+            .field("particles", &self.particles)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Simulation {
+    /// generates the scene's particles and finds its initial state (`[initial_state]`) on
+    /// `threads` threads at most (default one per core; a small scene uses fewer, with the same
+    /// results). `poll` runs while the initial state is found; returning true stops it.
+    pub fn new(
+        scene: &Scene,
+        threads: Option<usize>,
+        poll: &mut dyn FnMut() -> bool,
+    ) -> Result<Simulation, RunError> {
+        let (commands, inbox) = mpsc::channel();
+        let (outbox, replies) = mpsc::channel();
+        let interrupt = Arc::new(AtomicBool::new(false));
+        let available = threads.unwrap_or_else(rayon::current_num_threads).max(1);
+        let count = mpm_solver::useful_threads(scene.resolved().seeds.len(), available);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(count)
+            .build()
+            .map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
+        let job = Worker { inbox, outbox: outbox.clone(), interrupt: interrupt.clone() };
+        let scene = scene.clone();
+        let worker = std::thread::Builder::new()
+            .name("mpm-simulation".into())
+            .spawn(move || {
+                if let Err(e) = pool.install(|| dispatch::dispatch(&scene, job)) {
+                    let _ = outbox.send(Reply::Failed(e.into()));
+                }
+            })
+            .map_err(|e| RunError::Setup(format!("cannot start the simulation's thread: {e}")))?;
+        let mut sim = Simulation {
+            commands: Some(commands),
+            replies,
+            worker: Some(worker),
+            interrupt,
+            time: 0.0,
+            steps: 0,
+            particles: 0,
+        };
+        match sim.wait(poll)? {
+            Reply::Ready { time, steps, particles } => {
+                (sim.time, sim.steps, sim.particles) = (time, steps, particles);
+                Ok(sim)
+            }
+            Reply::Failed(e) => Err(e),
+            _ => Err(RunError::Setup("the simulation's thread answered out of turn".into())),
+        }
+    }
+
+    /// simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// steps taken since the start.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.particles
+    }
+
+    /// advances by `limit`, calling `poll` every [`POLL`] while the steps run; when `poll`
+    /// returns true the run stops after its current step (`stopped` is then
+    /// [`RunStatus::Interrupted`]). A solver failure is [`RunError::Solver`] with the summary at
+    /// the failing step; the simulation cannot go on after it.
+    pub fn advance(
+        &mut self,
+        limit: Limit,
+        poll: &mut dyn FnMut() -> bool,
+    ) -> Result<Advance, RunError> {
+        match limit {
+            Limit::Time(t) if !t.is_finite() => {
+                return Err(RunError::Arguments(format!(
+                    "advance to t = {t} s: not a finite time"
+                )));
+            }
+            _ => {}
+        }
+        self.send(Command::Advance(limit))?;
+        match self.wait(poll)? {
+            Reply::Advanced(r) => {
+                let a = (*r)?;
+                (self.time, self.steps) = (a.time, a.steps);
+                Ok(a)
+            }
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// a copy of the particles' fields.
+    pub fn fields(&mut self) -> Result<ParticleFields, RunError> {
+        self.send(Command::Fields)?;
+        match self.wait(&mut || false)? {
+            Reply::Fields(f) => Ok(*f),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// the energy ledger now (J per m of thickness).
+    pub fn energy(&mut self) -> Result<EnergyLedger, RunError> {
+        self.send(Command::Energy)?;
+        match self.wait(&mut || false)? {
+            Reply::Energy(e) => Ok(e),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// what [`run_scene`](crate::run_scene) would report if the run ended now (status
+    /// `Completed` once the scene's end time is reached, `Interrupted` before).
+    pub fn summary(&mut self) -> Result<RunSummary, RunError> {
+        self.send(Command::Summary)?;
+        match self.wait(&mut || false)? {
+            Reply::Summary(s) => Ok(*s),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// writes `dir/checkpoint.bin` and `dir/scene.toml` (creating `dir`): `mpm resume DIR`
+    /// continues the run from here, bit-identically, writing its output into `dir`.
+    pub fn checkpoint(&mut self, dir: &Path) -> Result<(), RunError> {
+        self.send(Command::Checkpoint(dir.to_path_buf()))?;
+        match self.wait(&mut || false)? {
+            Reply::Written(r) => r,
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn send(&self, c: Command) -> Result<(), RunError> {
+        self.commands
+            .as_ref()
+            .and_then(|s| s.send(c).ok())
+            .ok_or_else(|| RunError::Setup("the simulation has ended after an error".into()))
+    }
+
+    /// the worker's next reply, polling while waiting.
+    fn wait(&mut self, poll: &mut dyn FnMut() -> bool) -> Result<Reply, RunError> {
+        self.interrupt.store(false, Ordering::Relaxed);
+        loop {
+            match self.replies.recv_timeout(POLL) {
+                Ok(Reply::Failed(e)) => {
+                    self.commands = None;
+                    return Err(e);
+                }
+                Ok(r) => return Ok(r),
+                Err(RecvTimeoutError::Timeout) => {
+                    if poll() {
+                        self.interrupt.store(true, Ordering::Relaxed);
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    self.commands = None;
+                    return Err(RunError::Setup(
+                        "the simulation's thread ended (a panic in the solver)".into(),
+                    ));
+                }
+            }
+        }
+    }
+}
+
+impl Drop for Simulation {
+    fn drop(&mut self) {
+        // closing the channel ends the worker's loop
+        self.commands = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}
+
+fn unexpected(r: Reply) -> RunError {
+    match r {
+        Reply::Failed(e) => e,
+        _ => RunError::Setup("the simulation's thread answered out of turn".into()),
+    }
+}
+
+/// The worker's side: builds the solver with the scene's types and serves commands.
+struct Worker {
+    inbox: Receiver<Command>,
+    outbox: Sender<Reply>,
+    interrupt: Arc<AtomicBool>,
+}
+
+impl Job for Worker {
+    type Output = ();
+
+    fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        self,
+        scene: &Scene,
+        shape: S,
+        materials: Vec<M>,
+    ) {
+        let r = scene.resolved();
+        let particles = dispatch::particles(&r.seeds, &materials);
+        let mut solver = match Solver::new(shape, materials, particles, r.config.clone()) {
+            Ok(s) => s,
+            Err(e) => {
+                let _ = self.outbox.send(Reply::Failed(RunError::Setup(format!(
+                    "{}: the solver refused the scene: {e}",
+                    scene.origin()
+                ))));
+                return;
+            }
+        };
+        let opts = RunOptions { interrupt: Some(self.interrupt.clone()), ..Default::default() };
+        solver.set_interrupt(opts.interrupt.clone());
+        let initial = initial_state(&mut solver, &r.initial_state, &opts.progress);
+        solver.set_interrupt(None);
+        let initial = match initial {
+            Ok(i) => i,
+            Err(e) => {
+                let _ = self.outbox.send(Reply::Failed(RunError::Setup(format!(
+                    "{}: initial state: {e}",
+                    scene.origin()
+                ))));
+                return;
+            }
+        };
+        let history = History { dt_min: f64::INFINITY, ..History::default() };
+        let mut driver = Driver::begin(scene, None, history, initial.clone(), &opts);
+        if let Err(e) = driver.record_start(&solver) {
+            let _ = self.outbox.send(Reply::Failed(e));
+            return;
+        }
+        let mut history = driver.history;
+        let ready = Reply::Ready {
+            time: solver.time(),
+            steps: solver.step_count(),
+            particles: solver.particles().len(),
+        };
+        if self.outbox.send(ready).is_err() {
+            return;
+        }
+        let threads = rayon::current_num_threads();
+        let mut failed = false;
+        while let Ok(command) = self.inbox.recv() {
+            let reply = match command {
+                Command::Advance(limit) => {
+                    if failed {
+                        Reply::Failed(RunError::Setup("the simulation failed earlier".into()))
+                    } else {
+                        let mut driver = Driver::begin(
+                            scene,
+                            None,
+                            std::mem::take(&mut history),
+                            initial.clone(),
+                            &opts,
+                        );
+                        let result = advance(&mut solver, &mut driver, limit);
+                        failed = result.is_err();
+                        let reply = outcome(&solver, &driver, result, threads);
+                        history = driver.history;
+                        Reply::Advanced(Box::new(reply))
+                    }
+                }
+                Command::Fields => Reply::Fields(Box::new(fields(solver.particles()))),
+                Command::Energy => Reply::Energy(solver.energy()),
+                Command::Summary => {
+                    let mut driver = Driver::begin(scene, None, history, initial.clone(), &opts);
+                    let status = if mpm_solver::reached(solver.time(), r.end_time) {
+                        RunStatus::Completed
+                    } else {
+                        RunStatus::Interrupted
+                    };
+                    let s = driver.summary(&solver, status, None, threads);
+                    history = std::mem::take(&mut driver.history);
+                    Reply::Summary(Box::new(s))
+                }
+                Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
+                    &dir,
+                    scene,
+                    CheckpointFile {
+                        format: checkpoint::FORMAT,
+                        code_version: env!("CARGO_PKG_VERSION").to_string(),
+                        origin: scene.origin().to_string(),
+                        scene_text: scene.text().to_string(),
+                        state: M::wrap(solver.checkpoint()),
+                        history: history.clone(),
+                    },
+                )),
+            };
+            if self.outbox.send(reply).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// steps `solver` by `limit` with `driver` recording, timed into its history.
+fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    solver: &mut Solver<M, S, N>,
+    driver: &mut Driver<'_>,
+    limit: Limit,
+) -> Result<RunEnd, SolverError> {
+    let (steps0, start) = (solver.step_count(), Instant::now());
+    let result = match limit {
+        Limit::Time(t) => solver.run_until(t, driver),
+        Limit::Steps(n) => loop {
+            if solver.step_count() - steps0 >= n {
+                break Ok(RunEnd::EndTime);
+            }
+            match solver.step() {
+                Err(e) => break Err(e),
+                Ok(report) => {
+                    if driver.after_step(solver, &report).is_break() {
+                        break Ok(RunEnd::Stopped);
+                    }
+                }
+            }
+        },
+    };
+    driver.history.wall_time += start.elapsed().as_secs_f64();
+    driver.history.particle_steps +=
+        (solver.step_count() - steps0) as f64 * solver.particles().len() as f64;
+    result
+}
+
+/// the caller's view of an advance.
+fn outcome<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    solver: &Solver<M, S, N>,
+    driver: &Driver<'_>,
+    result: Result<RunEnd, SolverError>,
+    threads: usize,
+) -> Result<Advance, RunError> {
+    let (status, error) = driver.status(&result, solver, &|e: &SolverError| e.to_string());
+    match result {
+        Err(e) => Err(RunError::Solver {
+            message: e.to_string(),
+            summary: Box::new(driver.summary(solver, status, error, threads)),
+        }),
+        Ok(end) => Ok(Advance {
+            stopped: (end == RunEnd::Stopped).then_some(status),
+            time: solver.time(),
+            steps: solver.step_count(),
+        }),
+    }
+}
+
+fn fields<S>(p: &mpm_solver::Particles<S>) -> ParticleFields {
+    ParticleFields {
+        position: p.position.iter().map(|v| [v.x, v.y]).collect(),
+        velocity: p.velocity.iter().map(|v| [v.x, v.y]).collect(),
+        stress: p.stress.iter().map(|s| [s.xx, s.yy, s.zz, s.xy]).collect(),
+        mass: p.mass.clone(),
+        volume: p.volume.clone(),
+        initial_position: p.initial_position.iter().map(|v| [v.x, v.y]).collect(),
+        body: p.body.clone(),
+        material: p.material.clone(),
+    }
+}
+
+/// `dir/checkpoint.bin` and `dir/scene.toml`.
+fn write_checkpoint(dir: &Path, scene: &Scene, file: CheckpointFile) -> Result<(), RunError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|source| OutputError::Io { path: dir.to_path_buf(), source })?;
+    atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
+    checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?;
+    Ok(())
+}
