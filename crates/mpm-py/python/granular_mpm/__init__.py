@@ -1,0 +1,407 @@
+"""granular_mpm: the Material Point Method for dry granular flows and landslide runout.
+
+The solver of Abe, Johansson & Konagai (2005) and beyond (Drucker-Prager and mu(I) soils,
+Coulomb boundaries on any plane, terrain-following grids over DEM sections), scripted from
+Python. Scenes are the TOML files of ``docs/scene-format.md``; a scene is validated as the
+``mpm`` command validates it, and a refused one raises :class:`SceneError` with the same
+located message (file, line, field, value, admissible range, fix).
+
+>>> import granular_mpm as gm
+>>> scene = gm.Scene.embedded("sliding_inclined")
+>>> result = gm.run(scene)
+>>> result.summary["status"]
+'completed'
+>>> result.runout["front_x"][-1]    # a NumPy array (a pandas Series with pandas installed)
+
+Runs release the GIL while they step; Ctrl-C stops a run after its current step and raises
+``KeyboardInterrupt`` (a run with an output folder leaves a checkpoint that :func:`resume`
+continues).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _native
+from ._native import SceneError, SolverError
+
+__all__ = [
+    "Scene",
+    "Simulation",
+    "Result",
+    "SceneError",
+    "SolverError",
+    "run",
+    "resume",
+    "scenes",
+    "read_series",
+    "__version__",
+]
+
+__version__: str = _native.__version__
+
+#: The series a run writes, by name (``<name>.csv`` in its folder), when the scene asks for them.
+SERIES = ("energy", "runout", "probes", "envelope", "deposit")
+
+PathLike = Union[str, "os.PathLike[str]"]
+ProgressCallback = Callable[[float, float, int], Any]
+
+
+def scenes() -> List[str]:
+    """The embedded scenes' names; the first (the paper's dry-sand flume) is the default."""
+    return list(_native.scenes())
+
+
+def _toml_value(value: Any) -> str:
+    """A Python value as a TOML value: numbers, booleans, strings, lists and dicts of them."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if v != v or v in (float("inf"), float("-inf")):
+            # written as TOML's own spelling; validation refuses it where a finite value is due
+            return "nan" if v != v else ("inf" if v > 0 else "-inf")
+        return repr(v)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+    raise TypeError(f"cannot write {type(value).__name__} as a TOML value: {value!r}")
+
+
+class Scene:
+    """A validated scene.
+
+    Build one with :meth:`from_file`, :meth:`from_str` or :meth:`embedded`; change a field with
+    :meth:`set` (validated again as a whole, so a bad value raises :class:`SceneError` as the
+    file would).
+    """
+
+    def __init__(self, native: "_native.Scene") -> None:
+        self._native = native
+
+    @classmethod
+    def from_file(cls, path: PathLike) -> "Scene":
+        """Loads a scene file; the files it names (DEM, polylines) are relative to it."""
+        return cls(_native.Scene.from_file(os.fspath(path)))
+
+    @classmethod
+    def from_str(cls, text: str, name: str = "<string>") -> "Scene":
+        """A scene given as TOML text; ``name`` is how error messages call it."""
+        return cls(_native.Scene.from_str(text, name))
+
+    @classmethod
+    def embedded(cls, name: str = "flume") -> "Scene":
+        """An embedded scene (:func:`scenes` lists them)."""
+        return cls(_native.Scene.embedded(name))
+
+    def set(self, path: str, value: Any) -> "Scene":
+        """Sets the field at ``path`` (``"materials.sand.friction_angle_deg"``,
+        ``"bodies[0].min"``) to ``value`` and validates the scene again; returns the scene, so
+        calls chain. On a refusal the scene is left as it was."""
+        self._native = self._native.with_value(path, _toml_value(value))
+        return self
+
+    def copy(self) -> "Scene":
+        """An independent copy (to vary one scene in a loop)."""
+        return Scene(self._native)
+
+    @property
+    def text(self) -> str:
+        """The scene's TOML text, as it would run."""
+        return self._native.text
+
+    @property
+    def origin(self) -> str:
+        """Where the scene came from (a path, ``embedded:NAME`` or the name given)."""
+        return self._native.origin
+
+    @property
+    def particle_count(self) -> int:
+        """Particles the scene generates."""
+        return self._native.particle_count
+
+    @property
+    def end_time(self) -> float:
+        """The simulated time the run ends at (s)."""
+        return self._native.end_time
+
+    @property
+    def initial_dt(self) -> float:
+        """The first step's time increment (s)."""
+        return self._native.initial_dt
+
+    @property
+    def materials(self) -> List[str]:
+        """The materials' names, in the order the particles' ``material`` numbers them."""
+        return list(self._native.materials)
+
+    def check(self) -> Dict[str, Any]:
+        """``mpm check``: validates fully without stepping and estimates particles, steps,
+        memory and disk."""
+        return json.loads(self._native.check_json())
+
+    def write(self, path: PathLike) -> None:
+        """Writes the scene's TOML text to ``path``."""
+        Path(path).write_text(self.text)
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def read_series(path: PathLike) -> Dict[str, np.ndarray]:
+    """One of a run's CSV series as a dict of column name to NumPy array (empty cells are NaN)."""
+    with open(path, encoding="utf-8") as f:
+        header = f.readline().strip().split(",")
+        rows = [line.rstrip("\n").split(",") for line in f if line.strip()]
+    columns: Dict[str, np.ndarray] = {}
+    for i, name in enumerate(header):
+        columns[name] = np.array([float(r[i]) if i < len(r) and r[i] else np.nan for r in rows])
+    return columns
+
+
+def _frame(columns: Dict[str, np.ndarray]) -> Any:
+    try:
+        import pandas as pd
+    except ImportError:
+        return columns
+    return pd.DataFrame(columns)
+
+
+class Result:
+    """What a run returns: its summary and its series.
+
+    ``summary`` is ``summary.json`` as a dict. Each series (``energy``, ``runout``, ``probes``,
+    ``envelope``, ``deposit``) is a pandas DataFrame when pandas is installed, else a dict of
+    NumPy arrays, or ``None`` when the scene did not ask for it. ``out`` is the run's folder
+    (``None`` when the run wrote into a temporary folder, since removed).
+    """
+
+    def __init__(
+        self,
+        summary: Dict[str, Any],
+        series: Dict[str, Optional[Dict[str, np.ndarray]]],
+        out: Optional[Path],
+        messages: Sequence[str] = (),
+    ) -> None:
+        self.summary = summary
+        self.out = out
+        self.messages = list(messages)
+        self._series = series
+
+    def series(self, name: str) -> Optional[Dict[str, np.ndarray]]:
+        """A series as a dict of NumPy arrays (whether or not pandas is installed)."""
+        return self._series.get(name)
+
+    def _get(self, name: str) -> Any:
+        s = self._series.get(name)
+        return None if s is None else _frame(s)
+
+    @property
+    def energy(self) -> Any:
+        """The energy ledger over time (``energy.csv``)."""
+        return self._get("energy")
+
+    @property
+    def runout(self) -> Any:
+        """Front, tail, thickness and centre-of-mass travel over time (``runout.csv``)."""
+        return self._get("runout")
+
+    @property
+    def probes(self) -> Any:
+        """The probe particles over time (``probes.csv``)."""
+        return self._get("probes")
+
+    @property
+    def envelope(self) -> Any:
+        """Per ground station: largest thickness, speeds, pressure, first arrival."""
+        return self._get("envelope")
+
+    @property
+    def deposit(self) -> Any:
+        """Per ground station: the final deposit's thickness."""
+        return self._get("deposit")
+
+    @property
+    def status(self) -> str:
+        """``"completed"``, ``"at_rest"``, ``"energy_alarm"``, ``"step_limit"``, ..."""
+        return self.summary["status"]
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (
+            f"Result(status={s['status']!r}, t={s['simulated_time']:.4g} s, "
+            f"steps={s['steps']}, front={s['runout']['front_x']:.4g} m)"
+        )
+
+
+def _progress_bar(time: float, end_time: float, steps: int) -> None:
+    share = 0.0 if end_time <= 0 else min(1.0, time / end_time)
+    bar = "#" * int(30 * share)
+    sys.stderr.write(f"\r[{bar:<30}] t = {time:.4g} / {end_time:.4g} s, {steps} steps")
+    sys.stderr.flush()
+
+
+def _collect(raw: Any, out: Path, keep: bool, progress: Any) -> Result:
+    summary_json, messages = raw
+    if progress is True:
+        sys.stderr.write("\n")
+    for is_warning, text in messages:
+        if is_warning:
+            warnings.warn(text, RuntimeWarning, stacklevel=3)
+    series = {}
+    for name in SERIES:
+        path = out / f"{name}.csv"
+        series[name] = read_series(path) if path.is_file() else None
+    return Result(json.loads(summary_json), series, out if keep else None, [t for _, t in messages])
+
+
+def _callback(progress: Union[bool, ProgressCallback, None]) -> Optional[ProgressCallback]:
+    if progress is True:
+        return _progress_bar
+    if progress is False or progress is None:
+        return None
+    if not callable(progress):
+        raise TypeError("progress is True, False or a callable(time, end_time, steps)")
+    return progress
+
+
+def run(
+    scene: Union[Scene, str, PathLike],
+    out: Optional[PathLike] = None,
+    threads: Optional[int] = None,
+    progress: Union[bool, ProgressCallback, None] = False,
+    force: bool = False,
+) -> Result:
+    """Runs a scene (a :class:`Scene`, a scene file's path or an embedded scene's name).
+
+    ``out`` is the output folder (frames, series, plots, ``summary.json``, checkpoints); by
+    default the run writes into a temporary folder that is removed once its series are read.
+    ``threads`` caps the worker threads (default one per core; the results are the same bits for
+    any count). ``progress`` is ``True`` for a bar on stderr, or a callable
+    ``f(time, end_time, steps)`` called a few times a second. ``force`` overwrites a folder that
+    holds another run.
+
+    Raises :class:`SceneError` for a refused scene, :class:`SolverError` when the solver stops
+    with an instability, ``KeyboardInterrupt`` on Ctrl-C (after the current step).
+    """
+    native = _as_scene(scene)._native
+    callback = _callback(progress)
+    if out is None:
+        with tempfile.TemporaryDirectory(prefix="granular_mpm-") as tmp:
+            raw = _native.run(native, tmp, threads, True, callback)
+            return _collect(raw, Path(tmp), False, progress)
+    raw = _native.run(native, os.fspath(out), threads, force, callback)
+    return _collect(raw, Path(out), True, progress)
+
+
+def resume(
+    out: PathLike,
+    threads: Optional[int] = None,
+    progress: Union[bool, ProgressCallback, None] = False,
+) -> Result:
+    """Continues the run in folder ``out`` from its checkpoint, bit-identically to a run that
+    was never interrupted."""
+    raw = _native.resume(os.fspath(out), threads, _callback(progress))
+    return _collect(raw, Path(out), True, progress)
+
+
+def _as_scene(scene: Union[Scene, str, PathLike]) -> Scene:
+    if isinstance(scene, Scene):
+        return scene
+    name = os.fspath(scene)
+    if not os.path.exists(name) and name in scenes():
+        return Scene.embedded(name)
+    return Scene.from_file(name)
+
+
+class Simulation:
+    """A run advanced by the caller: for coupling and custom analysis.
+
+    >>> sim = Simulation(Scene.embedded("free_fall"))
+    >>> sim.step(10)             # ten steps; None, or why the run stopped early
+    >>> sim.advance_to(0.05)     # to t = 0.05 s
+    >>> sim.positions.shape      # (N, 2)
+
+    The fields are copies, taken when read. The energy ledger, the summary and checkpoints are
+    those of :func:`run` at the same step.
+    """
+
+    def __init__(self, scene: Union[Scene, str, PathLike], threads: Optional[int] = None):
+        self._native = _native.Simulation(_as_scene(scene)._native, threads)
+
+    def step(self, n: int = 1) -> Optional[str]:
+        """``n`` more steps. Returns ``None``, or why the run stopped before (``"at_rest"``,
+        ``"energy_alarm"``, ``"step_limit"``)."""
+        return self._native.step(n)
+
+    def advance_to(self, t: float) -> Optional[str]:
+        """Steps until simulated time ``t`` (s), the last step shortened to land on it (so the
+        steps after it differ from those of a run in one go; :meth:`step` keeps them)."""
+        return self._native.advance_to(t)
+
+    @property
+    def time(self) -> float:
+        """Simulated time (s)."""
+        return self._native.time
+
+    @property
+    def steps(self) -> int:
+        """Steps taken."""
+        return self._native.steps
+
+    @property
+    def particle_count(self) -> int:
+        """Number of particles."""
+        return self._native.particle_count
+
+    def fields(self) -> Dict[str, np.ndarray]:
+        """All particle fields at once: ``position``, ``velocity``, ``initial_position`` (N × 2,
+        m and m/s), ``stress`` (N × 4: xx, yy, zz, xy in Pa, tension positive), ``mass``,
+        ``volume`` (per m of thickness), ``body`` and ``material`` (indices)."""
+        return dict(self._native.fields())
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Particle positions, N × 2 (m)."""
+        return self._native.fields()["position"]
+
+    @property
+    def velocities(self) -> np.ndarray:
+        """Particle velocities, N × 2 (m/s)."""
+        return self._native.fields()["velocity"]
+
+    @property
+    def stresses(self) -> np.ndarray:
+        """Cauchy stresses, N × 4: xx, yy, zz (out of plane), xy (Pa, tension positive)."""
+        return self._native.fields()["stress"]
+
+    @property
+    def energy(self) -> Dict[str, float]:
+        """The energy ledger now (J per m of thickness): kinetic, strain, potential, the
+        dissipations, external work and the residual."""
+        return json.loads(self._native.energy_json())
+
+    def summary(self) -> Dict[str, Any]:
+        """What :func:`run` would report if the run ended now."""
+        return json.loads(self._native.summary_json())
+
+    def checkpoint(self, out: PathLike) -> None:
+        """Writes ``out/checkpoint.bin`` and ``out/scene.toml``: :func:`resume` (or
+        ``mpm resume``) continues the run from here into that folder."""
+        self._native.checkpoint(os.fspath(out))
+
+    def __repr__(self) -> str:
+        return f"Simulation(t={self.time:.6g} s, steps={self.steps}, particles={self.particle_count})"

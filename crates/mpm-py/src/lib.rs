@@ -1,0 +1,499 @@
+//! `granular_mpm._native`: the Python extension over the `mpm-run` library. It only parses,
+//! drives and reports: scenes are loaded and validated by `mpm-scene`, runs are `run_scene` and
+//! `resume`, and the stepping API is `mpm_run::Simulation`. The Python package around it
+//! (`python/granular_mpm`) turns the summaries into dicts and the series into NumPy arrays or
+//! pandas DataFrames.
+//!
+//! While a run or a step works, the GIL is released and the calling thread only waits, every
+//! `mpm_run::POLL`, looking for a Python signal (Ctrl-C) and calling the progress callback; a
+//! signal stops the work after its current step, then raises `KeyboardInterrupt` with the state
+//! consistent (a run writes its checkpoint, as `mpm` does on Ctrl-C).
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use mpm_run::{
+    Limit, Progress, ProgressSink, RunError, RunOptions, RunStatus, SceneError as NativeSceneError,
+};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+pyo3::create_exception!(
+    _native,
+    SceneError,
+    PyValueError,
+    "A scene was refused: `str(e)` is the located message (file, line, field, value, \
+     admissible range and fix), and `e.origin`, `e.line`, `e.column`, `e.path`, `e.value`, \
+     `e.problem`, `e.admissible`, `e.fix` its parts."
+);
+pyo3::create_exception!(
+    _native,
+    SolverError,
+    PyRuntimeError,
+    "The solver stopped with an instability (the step, the particle and the cause in the \
+     message); `e.summary_json` is the run's summary at that step, and what was written stays \
+     readable."
+);
+
+/// the located scene error as a Python `SceneError` with its parts as attributes.
+fn scene_error(py: Python<'_>, e: &NativeSceneError) -> PyErr {
+    let err = SceneError::new_err(e.to_string());
+    let v = err.value(py);
+    let _ = v.setattr("origin", &e.origin);
+    let _ = v.setattr("line", e.line);
+    let _ = v.setattr("column", e.column);
+    let _ = v.setattr("path", &e.path);
+    let _ = v.setattr("value", e.value.as_deref());
+    let _ = v.setattr("problem", &e.problem);
+    let _ = v.setattr("admissible", &e.admissible);
+    let _ = v.setattr("fix", &e.fix);
+    err
+}
+
+/// a run's error as the Python exception a user expects.
+fn run_error(py: Python<'_>, e: RunError) -> PyErr {
+    match e {
+        RunError::Scene(s) => scene_error(py, &s),
+        RunError::Solver { message, summary } => {
+            let err = SolverError::new_err(message);
+            let json = serde_json::to_string(&summary).unwrap_or_default();
+            let _ = err.value(py).setattr("summary_json", json);
+            err
+        }
+        RunError::Output(o) => PyOSError::new_err(o.to_string()),
+        RunError::Arguments(a) => PyValueError::new_err(a),
+        RunError::Setup(s) => PyRuntimeError::new_err(s),
+    }
+}
+
+/// A validated scene (the TOML scene format of `docs/scene-format.md`).
+#[pyclass(module = "granular_mpm._native", name = "Scene", frozen)]
+#[derive(Clone)]
+struct Scene {
+    inner: mpm_run::Scene,
+}
+
+#[pymethods]
+impl Scene {
+    /// loads and validates a scene file; files it names (DEMs, polylines) are relative to it.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
+        mpm_run::load_scene_file(&path)
+            .map(|inner| Scene { inner })
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// validates a scene given as TOML text; `name` is how messages call it.
+    #[staticmethod]
+    #[pyo3(signature = (text, name = "<string>"))]
+    fn from_str(py: Python<'_>, text: &str, name: &str) -> PyResult<Scene> {
+        mpm_run::load_scene_str(text, name)
+            .map(|inner| Scene { inner })
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// an embedded scene (`granular_mpm.scenes()` lists them; the default is the paper's flume).
+    #[staticmethod]
+    #[pyo3(signature = (name = "flume"))]
+    fn embedded(py: Python<'_>, name: &str) -> PyResult<Scene> {
+        let Some(text) = mpm_run::embedded_scene(name) else {
+            let names: Vec<&str> = mpm_run::SCENES.iter().map(|(n, _)| *n).collect();
+            return Err(PyValueError::new_err(format!(
+                "no embedded scene `{name}`: the embedded scenes are {}",
+                names.join(", ")
+            )));
+        };
+        mpm_run::load_scene_str(text, &format!("embedded:{name}"))
+            .map(|inner| Scene { inner })
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// this scene with the field at `path` set to `value`, a TOML value as text (`"35.0"`,
+    /// `"\"musl\""`, `"[0.0, 1.2]"`), validated again.
+    fn with_value(&self, py: Python<'_>, path: &str, value: &str) -> PyResult<Scene> {
+        self.inner
+            .with_value(path, value)
+            .map(|inner| Scene { inner })
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// the scene's TOML text.
+    #[getter]
+    fn text(&self) -> &str {
+        self.inner.text()
+    }
+
+    /// where the scene came from (a path, `embedded:NAME` or the name given).
+    #[getter]
+    fn origin(&self) -> &str {
+        self.inner.origin()
+    }
+
+    /// the hash `summary.json` names the scene by.
+    #[getter]
+    fn hash(&self) -> String {
+        self.inner.hash()
+    }
+
+    /// particles the scene generates.
+    #[getter]
+    fn particle_count(&self) -> usize {
+        self.inner.particle_count()
+    }
+
+    /// simulated time the run ends at (s).
+    #[getter]
+    fn end_time(&self) -> f64 {
+        self.inner.end_time()
+    }
+
+    /// the first step's Δt (s).
+    #[getter]
+    fn initial_dt(&self) -> f64 {
+        self.inner.initial_dt()
+    }
+
+    /// the materials' names, in the order particles' `material` numbers them.
+    #[getter]
+    fn materials(&self) -> Vec<String> {
+        self.inner.resolved().material_names.clone()
+    }
+
+    /// `mpm check`: the full validation and estimates, as JSON text.
+    fn check_json(&self, py: Python<'_>) -> PyResult<String> {
+        let report = mpm_run::check_scene(&self.inner).map_err(|e| run_error(py, e))?;
+        serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene({:?}, {} particles, end_time {} s)",
+            self.inner.origin(),
+            self.inner.particle_count(),
+            self.inner.end_time()
+        )
+    }
+}
+
+/// the embedded scenes' names (the first is the default).
+#[pyfunction]
+fn scenes() -> Vec<&'static str> {
+    mpm_run::SCENES.iter().map(|(n, _)| *n).collect()
+}
+
+/// What the worker reported last and the messages it sent, read by the waiting thread.
+#[derive(Default)]
+struct Watch {
+    state: Mutex<(f64, f64, u64)>,
+    messages: Mutex<Vec<(bool, String)>>,
+}
+
+impl Progress for Watch {
+    fn start(&self, end_time: f64, time: f64, steps: u64) {
+        if let Ok(mut s) = self.state.lock() {
+            *s = (end_time, time, steps);
+        }
+    }
+    fn update(&self, time: f64, steps: u64) {
+        if let Ok(mut s) = self.state.lock() {
+            (s.1, s.2) = (time, steps);
+        }
+    }
+    fn warn(&self, message: &str) {
+        if let Ok(mut m) = self.messages.lock() {
+            m.push((true, message.to_string()));
+        }
+    }
+    fn note(&self, message: &str) {
+        if let Ok(mut m) = self.messages.lock() {
+            m.push((false, message.to_string()));
+        }
+    }
+    fn finish(&self) {}
+}
+
+/// How often a progress callback is called at most.
+const PROGRESS_EVERY: Duration = Duration::from_millis(250);
+
+/// The waiting thread's side: signals, progress, and the first Python error they raised.
+struct Waiter {
+    progress: Option<Py<PyAny>>,
+    watch: Arc<Watch>,
+    pending: Option<PyErr>,
+    last: Instant,
+}
+
+impl Waiter {
+    fn new(progress: Option<Py<PyAny>>) -> Self {
+        Waiter { progress, watch: Arc::default(), pending: None, last: Instant::now() }
+    }
+
+    /// true when the work should stop after its current step.
+    fn poll(&mut self) -> bool {
+        if self.pending.is_some() {
+            return true;
+        }
+        Python::attach(|py| {
+            if let Err(e) = py.check_signals() {
+                self.pending = Some(e);
+                return true;
+            }
+            if let Some(cb) = &self.progress {
+                if self.last.elapsed() >= PROGRESS_EVERY {
+                    self.last = Instant::now();
+                    let (end, time, steps) = self.watch.state.lock().map_or((0.0, 0.0, 0), |s| *s);
+                    if let Err(e) = cb.call1(py, (time, end, steps)) {
+                        self.pending = Some(e);
+                        return true;
+                    }
+                }
+            }
+            false
+        })
+    }
+
+    /// the messages the run sent, as (is_warning, text).
+    fn messages(&self) -> Vec<(bool, String)> {
+        self.watch.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+}
+
+/// runs `work` on its own thread with the GIL released, polling `waiter` meanwhile and setting
+/// `flag` when it asks to stop.
+fn detached<T: Send>(
+    py: Python<'_>,
+    waiter: &mut Waiter,
+    flag: &AtomicBool,
+    work: impl FnOnce() -> Result<T, RunError> + Send,
+) -> Result<T, RunError> {
+    py.detach(|| {
+        std::thread::scope(|s| {
+            let handle = s.spawn(work);
+            while !handle.is_finished() {
+                std::thread::sleep(mpm_run::POLL);
+                if waiter.poll() {
+                    flag.store(true, Ordering::Relaxed);
+                }
+            }
+            handle.join().unwrap_or_else(|_| {
+                Err(RunError::Setup(
+                    "the run's thread panicked (a defect: please report it)".into(),
+                ))
+            })
+        })
+    })
+}
+
+/// the summary as JSON text and the run's messages.
+type Ran = (String, Vec<(bool, String)>);
+
+/// runs `scene` into `out` (see `granular_mpm.run`).
+#[pyfunction]
+#[pyo3(signature = (scene, out, threads = None, force = false, progress = None))]
+fn run(
+    py: Python<'_>,
+    scene: &Scene,
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+    force: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Ran> {
+    let mut waiter = Waiter::new(progress);
+    let flag = Arc::new(AtomicBool::new(false));
+    let opts = RunOptions {
+        out_dir: out,
+        threads,
+        progress: ProgressSink(Some(waiter.watch.clone())),
+        force,
+        stop_after: None,
+        interrupt: Some(flag.clone()),
+    };
+    let scene = &scene.inner;
+    let result = detached(py, &mut waiter, &flag, || mpm_run::run_scene(scene, &opts));
+    finish(py, waiter, result)
+}
+
+/// continues the run in `out` from its checkpoint (see `granular_mpm.resume`).
+#[pyfunction]
+#[pyo3(signature = (out, threads = None, progress = None))]
+fn resume(
+    py: Python<'_>,
+    out: PathBuf,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Ran> {
+    let mut waiter = Waiter::new(progress);
+    let flag = Arc::new(AtomicBool::new(false));
+    let opts = RunOptions {
+        out_dir: None,
+        threads,
+        progress: ProgressSink(Some(waiter.watch.clone())),
+        force: false,
+        stop_after: None,
+        interrupt: Some(flag.clone()),
+    };
+    let result = detached(py, &mut waiter, &flag, || mpm_run::resume(&out, &opts));
+    finish(py, waiter, result)
+}
+
+/// a run's result for Python: a pending KeyboardInterrupt first, then the run's own error.
+fn finish(
+    py: Python<'_>,
+    mut waiter: Waiter,
+    result: Result<mpm_run::RunSummary, RunError>,
+) -> PyResult<Ran> {
+    if let Some(e) = waiter.pending.take() {
+        return Err(e);
+    }
+    let summary = result.map_err(|e| run_error(py, e))?;
+    let json =
+        serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    Ok((json, waiter.messages()))
+}
+
+/// A run advanced step by step (see `granular_mpm.Simulation`).
+#[pyclass(module = "granular_mpm._native", name = "Simulation")]
+struct Simulation {
+    inner: Mutex<mpm_run::Simulation>,
+}
+
+impl Simulation {
+    fn advance(&self, py: Python<'_>, limit: Limit) -> PyResult<Option<String>> {
+        let mut guard = self
+            .inner
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))?;
+        let sim = &mut *guard;
+        let mut waiter = Waiter::new(None);
+        let result = py.detach(|| sim.advance(limit, &mut || waiter.poll()));
+        if let Some(e) = waiter.pending.take() {
+            return Err(e);
+        }
+        let a = result.map_err(|e| run_error(py, e))?;
+        Ok(a.stopped.map(status_name))
+    }
+
+    fn with<T>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(&mut mpm_run::Simulation) -> Result<T, RunError>,
+    ) -> PyResult<T> {
+        let mut guard = self
+            .inner
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))?;
+        f(&mut guard).map_err(|e| run_error(py, e))
+    }
+}
+
+fn status_name(s: RunStatus) -> String {
+    serde_json::to_value(s)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_else(|| format!("{s:?}"))
+}
+
+#[pymethods]
+impl Simulation {
+    /// generates the scene's particles and its initial state.
+    #[new]
+    #[pyo3(signature = (scene, threads = None))]
+    fn new(py: Python<'_>, scene: &Scene, threads: Option<usize>) -> PyResult<Simulation> {
+        let mut waiter = Waiter::new(None);
+        let scene = &scene.inner;
+        let result = py.detach(|| mpm_run::Simulation::new(scene, threads, &mut || waiter.poll()));
+        if let Some(e) = waiter.pending.take() {
+            return Err(e);
+        }
+        let inner = result.map_err(|e| run_error(py, e))?;
+        Ok(Simulation { inner: Mutex::new(inner) })
+    }
+
+    /// `n` more steps; returns `None`, or why the run stopped early (`"at_rest"`,
+    /// `"energy_alarm"`, `"step_limit"`).
+    #[pyo3(signature = (n = 1))]
+    fn step(&self, py: Python<'_>, n: u64) -> PyResult<Option<String>> {
+        self.advance(py, Limit::Steps(n))
+    }
+
+    /// steps until simulated time `t` (s), the last step shortened to land on it.
+    fn advance_to(&self, py: Python<'_>, t: f64) -> PyResult<Option<String>> {
+        self.advance(py, Limit::Time(t))
+    }
+
+    /// simulated time (s).
+    #[getter]
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        self.with(py, |s| Ok(s.time()))
+    }
+
+    /// steps taken.
+    #[getter]
+    fn steps(&self, py: Python<'_>) -> PyResult<u64> {
+        self.with(py, |s| Ok(s.steps()))
+    }
+
+    /// number of particles.
+    #[getter]
+    fn particle_count(&self, py: Python<'_>) -> PyResult<usize> {
+        self.with(py, |s| Ok(s.particle_count()))
+    }
+
+    /// the particles' fields as NumPy arrays (copies).
+    fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let f = self.with(py, |s| s.fields())?;
+        let d = PyDict::new(py);
+        let n = f.mass.len();
+        let flat2 = |v: &[[f64; 2]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+        d.set_item("position", PyArray1::from_vec(py, flat2(&f.position)).reshape([n, 2])?)?;
+        d.set_item("velocity", PyArray1::from_vec(py, flat2(&f.velocity)).reshape([n, 2])?)?;
+        d.set_item(
+            "initial_position",
+            PyArray1::from_vec(py, flat2(&f.initial_position)).reshape([n, 2])?,
+        )?;
+        let stress: Vec<f64> = f.stress.iter().flatten().copied().collect();
+        d.set_item("stress", PyArray1::from_vec(py, stress).reshape([n, 4])?)?;
+        d.set_item("mass", PyArray1::from_vec(py, f.mass))?;
+        d.set_item("volume", PyArray1::from_vec(py, f.volume))?;
+        d.set_item("body", PyArray1::from_vec(py, f.body))?;
+        d.set_item("material", PyArray1::from_vec(py, f.material))?;
+        Ok(d)
+    }
+
+    /// the energy ledger now, as JSON text.
+    fn energy_json(&self, py: Python<'_>) -> PyResult<String> {
+        let e = self.with(py, |s| s.energy())?;
+        serde_json::to_string(&e).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    /// what a run would report if it ended now, as JSON text.
+    fn summary_json(&self, py: Python<'_>) -> PyResult<String> {
+        let s = self.with(py, |s| s.summary())?;
+        serde_json::to_string(&s).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    /// writes `dir/checkpoint.bin` and `dir/scene.toml`; `granular_mpm.resume(dir)` or
+    /// `mpm resume DIR` continues from here.
+    fn checkpoint(&self, py: Python<'_>, dir: PathBuf) -> PyResult<()> {
+        self.with(py, |s| s.checkpoint(&dir))
+    }
+}
+
+/// The extension module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<Scene>()?;
+    m.add_class::<Simulation>()?;
+    m.add_function(wrap_pyfunction!(scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(resume, m)?)?;
+    m.add("SceneError", py.get_type::<SceneError>())?;
+    m.add("SolverError", py.get_type::<SolverError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

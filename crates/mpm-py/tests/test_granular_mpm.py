@@ -1,0 +1,157 @@
+"""Tests of the Python package against independent references: free fall's momentum (m g t),
+the run driver's own bits (a run and a stepped simulation of the same scene end with the same
+state hash; a resumed run too), the located messages of the scene validation, and the worked
+examples' answers."""
+
+import _thread
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import granular_mpm as gm
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "docs" / "examples"
+G = 9.81
+
+
+def short_fall(end_time=0.02):
+    return gm.Scene.embedded("free_fall").set("solver.end_time", end_time)
+
+
+def test_embedded_scenes_are_listed_with_the_flume_first():
+    names = gm.scenes()
+    assert names[0] == "flume"
+    assert {"free_fall", "sliding_horizontal", "sliding_inclined"} <= set(names)
+
+
+def test_free_fall_momentum_is_m_g_t_to_round_off():
+    # Free fall is exact in MPM: every node gains g Δt a step, so the mass-weighted mean velocity
+    # is -g t to round-off (the tolerance: 1e-12 relative, a few hundred steps of rounding).
+    sim = gm.Simulation(short_fall(0.05))
+    assert sim.advance_to(0.03) is None
+    f = sim.fields()
+    vy = np.sum(f["mass"] * f["velocity"][:, 1]) / np.sum(f["mass"])
+    assert sim.time == pytest.approx(0.03, abs=1e-15)
+    assert vy == pytest.approx(-G * 0.03, rel=1e-12)
+    assert f["position"].shape == (sim.particle_count, 2)
+    assert f["stress"].shape == (sim.particle_count, 4)
+    # the ledger's kinetic energy is the particles' (1e-12: summation order)
+    kinetic = 0.5 * np.sum(f["mass"] * np.sum(f["velocity"] ** 2, axis=1))
+    assert sim.energy["kinetic"] == pytest.approx(kinetic, rel=1e-12)
+
+
+def test_a_stepped_simulation_gives_the_runs_bits():
+    scene = short_fall()
+    ran = gm.run(scene)
+    sim = gm.Simulation(scene)
+    sim.step(5)
+    assert sim.steps == 5
+    sim.advance_to(scene.end_time)
+    stepped = sim.summary()
+    assert stepped["state_hash"] == ran.summary["state_hash"]
+    assert stepped["steps"] == ran.summary["steps"]
+    assert ran.status == "completed"
+
+
+def test_series_are_arrays_of_the_runs_csv_files(tmp_path):
+    r = gm.run(short_fall(), out=tmp_path / "fall")
+    energy = r.series("energy")
+    assert isinstance(energy["time"], np.ndarray)
+    assert energy["time"][0] == 0.0 and energy["time"][-1] == pytest.approx(0.02)
+    # the series' last row is the summary's ledger
+    assert energy["kinetic"][-1] == pytest.approx(r.summary["energy"]["kinetic"], rel=1e-12)
+    assert (tmp_path / "fall" / "summary.json").is_file()
+    assert r.out == tmp_path / "fall"
+
+
+def test_a_checkpoint_resumes_to_the_same_bits(tmp_path):
+    # step() keeps the steps of a run in one go; advance_to() shortens its last step to land on
+    # its time, so the reference is the simulation itself continued past the checkpoint
+    scene = short_fall()
+    whole = gm.run(scene).summary
+    sim = gm.Simulation(scene)
+    sim.step(20)
+    sim.checkpoint(tmp_path / "steps")
+    assert gm.resume(tmp_path / "steps").summary["state_hash"] == whole["state_hash"]
+    sim.advance_to(0.01)
+    sim.checkpoint(tmp_path / "landed")
+    sim.advance_to(scene.end_time)
+    resumed = gm.resume(tmp_path / "landed").summary
+    assert resumed["state_hash"] == sim.summary()["state_hash"]
+    assert resumed["status"] == "completed"
+
+
+def test_set_changes_a_field_and_refuses_a_bad_value_with_the_clis_message():
+    flume = gm.Scene.embedded("flume")
+    flume.set("materials.sand.friction_angle_deg", 35.0)
+    assert "friction_angle_deg = 35.0" in flume.text
+    before = flume.text
+    with pytest.raises(gm.SceneError) as caught:
+        flume.set("materials.sand.friction_angle_deg", 95.0)
+    e = caught.value
+    assert e.path == "materials.sand.friction_angle_deg"
+    assert e.line is not None and e.fix
+    assert "materials.sand.friction_angle_deg" in str(e) and "fix:" in str(e)
+    assert flume.text == before  # a refused change leaves the scene as it was
+    with pytest.raises(gm.SceneError) as unknown:
+        flume.set("solver.no_such_setting", 1)
+    assert "no_such_setting" in str(unknown.value)
+
+
+def test_a_missing_file_and_a_bad_text_raise_located_errors(tmp_path):
+    with pytest.raises(gm.SceneError):
+        gm.Scene.from_file(tmp_path / "absent.toml")
+    with pytest.raises(gm.SceneError) as caught:
+        gm.Scene.from_str("[grid]\nkind = 3\n", name="inline")
+    assert caught.value.origin == "inline" and caught.value.line == 2
+
+
+def test_ctrl_c_stops_a_run_after_a_step_and_leaves_a_checkpoint(tmp_path):
+    out = tmp_path / "interrupted"
+    scene = gm.Scene.embedded("flume")
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        gm.run(scene, out=out)
+    timer.cancel()
+    assert (out / "checkpoint.bin").is_file()
+    finished = gm.resume(out)
+    assert finished.status == "completed"
+    assert finished.summary["state_hash"] == "9e450aa93a701bb8"  # the flume's, uninterrupted
+
+
+def run_example(name, *args):
+    return subprocess.run(
+        [sys.executable, str(EXAMPLES / name), *args],
+        capture_output=True,
+        text=True,
+        cwd=os.fspath(ROOT),
+        check=False,
+    )
+
+
+def test_back_analysis_recovers_the_basal_friction_angle():
+    pytest.importorskip("scipy")
+    p = run_example("back_analysis.py", "--quick")
+    assert p.returncode == 0, p.stdout + p.stderr
+    line = [l for l in p.stdout.splitlines() if l.startswith("recovered")][0]
+    recovered = float(line.split(":")[1].split("°")[0])
+    assert abs(recovered - 25.0) <= 0.5, line
+
+
+def test_parametric_sweep_plots_the_travel_angle(tmp_path):
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "parametric.png"
+    p = run_example("parametric.py", "--quick", "--out", str(png))
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert png.stat().st_size > 10_000
+    table = gm.read_series(png.with_suffix(".csv"))
+    assert list(table["basal_friction_deg"]) == [20.0, 25.0, 30.0]
+    # a rougher base stops the slide sooner: the travel angle grows with the friction angle
+    assert np.all(np.diff(table["travel_angle_deg"]) > 0), table
