@@ -23,7 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 pyo3::create_exception!(
-    _native,
+    granular_mpm._native,
     SceneError,
     PyValueError,
     "A scene was refused: `str(e)` is the located message (file, line, field, value, \
@@ -31,7 +31,7 @@ pyo3::create_exception!(
      `e.problem`, `e.admissible`, `e.fix` its parts."
 );
 pyo3::create_exception!(
-    _native,
+    granular_mpm._native,
     SolverError,
     PyRuntimeError,
     "The solver stopped with an instability (the step, the particle and the cause in the \
@@ -363,10 +363,7 @@ struct Simulation {
 
 impl Simulation {
     fn advance(&self, py: Python<'_>, limit: Limit) -> PyResult<Option<String>> {
-        let mut guard = self
-            .inner
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))?;
+        let mut guard = self.lock()?;
         let sim = &mut *guard;
         let mut waiter = Waiter::new(None);
         let result = py.detach(|| sim.advance(limit, &mut || waiter.poll()));
@@ -377,15 +374,25 @@ impl Simulation {
         Ok(a.stopped.map(status_name))
     }
 
+    /// the simulation, if no other thread is using it: a thread that waited for the lock while
+    /// holding the GIL would deadlock with an advance that takes the GIL back to poll.
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, mpm_run::Simulation>> {
+        self.inner.try_lock().map_err(|e| match e {
+            std::sync::TryLockError::WouldBlock => PyRuntimeError::new_err(
+                "the simulation is busy in another thread (one call at a time)",
+            ),
+            std::sync::TryLockError::Poisoned(_) => {
+                PyRuntimeError::new_err("the simulation failed in another thread")
+            }
+        })
+    }
+
     fn with<T>(
         &self,
         py: Python<'_>,
         f: impl FnOnce(&mut mpm_run::Simulation) -> Result<T, RunError>,
     ) -> PyResult<T> {
-        let mut guard = self
-            .inner
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))?;
+        let mut guard = self.lock()?;
         f(&mut guard).map_err(|e| run_error(py, e))
     }
 }

@@ -104,6 +104,21 @@ def test_set_changes_a_field_and_refuses_a_bad_value_with_the_clis_message():
     assert "no_such_setting" in str(unknown.value)
 
 
+def test_python_values_become_toml_values():
+    v = gm._toml_value
+    assert (v(np.bool_(True)), v(np.float64(35.0)), v(np.int64(3))) == ("true", "35.0", "3")
+    assert v(np.array(2.5)) == "2.5"
+    assert v([1, [2.5, 'a"b\\']]) == '[1, [2.5, "a\\"b\\\\"]]'
+    assert v({"friction angle": 20.0, "kind": "x"}) == '{ "friction angle" = 20.0, kind = "x" }'
+    # a string with quotes, a backslash, a control character and non-ASCII text goes through
+    title = 'a "quoted" \\ title\x7f é 🙂'
+    scene = gm.Scene.embedded("flume").set("title", title)
+    tomllib = pytest.importorskip("tomllib")  # (Python ≥ 3.11)
+    assert tomllib.loads(scene.text)["title"] == title
+    with pytest.raises(TypeError):
+        v(object())
+
+
 def test_a_missing_file_and_a_bad_text_raise_located_errors(tmp_path):
     with pytest.raises(gm.SceneError):
         gm.Scene.from_file(tmp_path / "absent.toml")

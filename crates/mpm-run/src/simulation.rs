@@ -7,8 +7,8 @@
 //! front end checks for Ctrl-C there), so the state is always that of a whole step.
 //!
 //! The records are those of a run without an output directory: the same initial state, energy
-//! ledger, runout series, envelopes and rest watch, so [`Simulation::summary`] is what
-//! [`run_scene`] would report at the same step.
+//! ledger, runout series, envelopes and rest watch, and advanced by steps the same bits as
+//! [`run_scene`] (see [`Simulation::summary`] for what its summary holds).
 //!
 //! [`run_scene`]: crate::run_scene
 
@@ -199,11 +199,19 @@ impl Simulation {
         }
         self.send(Command::Advance(limit))?;
         match self.wait(poll)? {
-            Reply::Advanced(r) => {
-                let a = (*r)?;
-                (self.time, self.steps) = (a.time, a.steps);
-                Ok(a)
-            }
+            Reply::Advanced(r) => match *r {
+                Ok(a) => {
+                    (self.time, self.steps) = (a.time, a.steps);
+                    Ok(a)
+                }
+                Err(e) => {
+                    // the state is the failing step's (its fields and summary show it)
+                    if let RunError::Solver { summary, .. } = &e {
+                        (self.time, self.steps) = (summary.simulated_time, summary.steps);
+                    }
+                    Err(e)
+                }
+            },
             other => Err(unexpected(other)),
         }
     }
@@ -226,8 +234,11 @@ impl Simulation {
         }
     }
 
-    /// what [`run_scene`](crate::run_scene) would report if the run ended now (status
-    /// `Completed` once the scene's end time is reached, `Interrupted` before).
+    /// the summary of the run so far: the state's figures (steps, time, Δt, energy ledger and
+    /// check, state hash) as [`run_scene`](crate::run_scene) reports them, the runout measures
+    /// and indicators of the last recorded series row (the scene's `series_interval`), status
+    /// `Completed` once the scene's end time is reached and `Interrupted` before (a stop at rest
+    /// or an energy alarm is the `stopped` of the advance that met it).
     pub fn summary(&mut self) -> Result<RunSummary, RunError> {
         self.send(Command::Summary)?;
         match self.wait(&mut || false)? {
@@ -247,6 +258,9 @@ impl Simulation {
     }
 
     fn send(&self, c: Command) -> Result<(), RunError> {
+        // cleared before the command goes: a stop asked during the previous command must not
+        // stop this one
+        self.interrupt.store(false, Ordering::Relaxed);
         self.commands
             .as_ref()
             .and_then(|s| s.send(c).ok())
@@ -255,7 +269,6 @@ impl Simulation {
 
     /// the worker's next reply, polling while waiting.
     fn wait(&mut self, poll: &mut dyn FnMut() -> bool) -> Result<Reply, RunError> {
-        self.interrupt.store(false, Ordering::Relaxed);
         loop {
             match self.replies.recv_timeout(POLL) {
                 Ok(Reply::Failed(e)) => {
@@ -281,7 +294,8 @@ impl Simulation {
 
 impl Drop for Simulation {
     fn drop(&mut self) {
-        // closing the channel ends the worker's loop
+        // closing the channel ends the worker's loop (after the command it may still be on)
+        self.interrupt.store(true, Ordering::Relaxed);
         self.commands = None;
         if let Some(w) = self.worker.take() {
             let _ = w.join();

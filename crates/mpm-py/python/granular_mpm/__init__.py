@@ -60,24 +60,48 @@ def scenes() -> List[str]:
     return list(_native.scenes())
 
 
+def _toml_string(text: str) -> str:
+    """A TOML basic string: quotes, backslashes and control characters escaped."""
+    out = []
+    for c in text:
+        if c in ('"', "\\"):
+            out.append("\\" + c)
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\u{ord(c):04X}")
+        else:
+            out.append(c)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key: Any) -> str:
+    key = str(key)
+    bare = key and all(c.isascii() and (c.isalnum() or c in "_-") for c in key)
+    return key if bare else _toml_string(key)
+
+
 def _toml_value(value: Any) -> str:
-    """A Python value as a TOML value: numbers, booleans, strings, lists and dicts of them."""
-    if isinstance(value, bool):
+    """A Python value as a TOML value: numbers, booleans, strings, and lists and dicts of them
+    (NumPy scalars and arrays too)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (int, np.integer)):
         return str(int(value))
     if isinstance(value, (float, np.floating)):
         v = float(value)
-        if v != v or v in (float("inf"), float("-inf")):
-            # written as TOML's own spelling; validation refuses it where a finite value is due
-            return "nan" if v != v else ("inf" if v > 0 else "-inf")
+        if v != v:
+            return "nan"  # TOML's spelling; validation refuses it where a number is due
+        if v in (float("inf"), float("-inf")):
+            return "inf" if v > 0 else "-inf"
         return repr(v)
     if isinstance(value, str):
-        return json.dumps(value)
+        return _toml_string(value)
     if isinstance(value, (list, tuple, np.ndarray)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+        items = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{ " + items + " }"
     raise TypeError(f"cannot write {type(value).__name__} as a TOML value: {value!r}")
 
 
@@ -335,8 +359,9 @@ class Simulation:
     >>> sim.advance_to(0.05)     # to t = 0.05 s
     >>> sim.positions.shape      # (N, 2)
 
-    The fields are copies, taken when read. The energy ledger, the summary and checkpoints are
-    those of :func:`run` at the same step.
+    The fields are copies, taken when read. Advanced by :meth:`step`, the run takes the steps of
+    :func:`run`, to the same bits. One call at a time: a call from another thread while one
+    runs raises ``RuntimeError``.
     """
 
     def __init__(self, scene: Union[Scene, str, PathLike], threads: Optional[int] = None):
@@ -395,7 +420,9 @@ class Simulation:
         return json.loads(self._native.energy_json())
 
     def summary(self) -> Dict[str, Any]:
-        """What :func:`run` would report if the run ended now."""
+        """The run so far, as :func:`run` reports it: steps, time, energy ledger and state hash
+        now; the runout measures of the last recorded series row; status ``"completed"`` once the
+        scene's end time is reached, ``"interrupted"`` before."""
         return json.loads(self._native.summary_json())
 
     def checkpoint(self, out: PathLike) -> None:

@@ -130,7 +130,13 @@ fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> R
         return Err("an index where a table's field was expected".into());
     };
     if rest.is_empty() {
-        t.insert(k, Item::Value(value));
+        match t.get_mut(k) {
+            // the key and its comments stay; the value takes the old one's spacing and comment
+            Some(Item::Value(old)) => replace_keeping_decor(old, value),
+            _ => {
+                t.insert(k, Item::Value(value));
+            }
+        }
         return Ok(());
     }
     let next = t.entry(k).or_insert_with(|| {
@@ -141,13 +147,24 @@ fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> R
     set(next, rest, value)
 }
 
+/// `old` becomes `new`, with `old`'s surrounding whitespace and trailing comment.
+fn replace_keeping_decor(old: &mut Value, mut new: Value) {
+    *new.decor_mut() = old.decor().clone();
+    *old = new;
+}
+
 /// [`set`] inside an inline value (an inline table or an array).
 fn set_value(v: &mut Value, steps: &[Step<'_>], value: Value) -> Result<(), String> {
     let (first, rest) = steps.split_first().ok_or("an empty path")?;
     match (first, v) {
         (Step::Key(k), Value::InlineTable(t)) => {
             if rest.is_empty() {
-                t.insert(*k, value);
+                match t.get_mut(k) {
+                    Some(old) => replace_keeping_decor(old, value),
+                    None => {
+                        t.insert(*k, value);
+                    }
+                }
                 return Ok(());
             }
             let v =
@@ -160,7 +177,9 @@ fn set_value(v: &mut Value, steps: &[Step<'_>], value: Value) -> Result<(), Stri
                 return Err(format!("index {i} beyond the {len} elements there"));
             }
             if rest.is_empty() {
-                a.replace(*i, value);
+                if let Some(old) = a.get_mut(*i) {
+                    replace_keeping_decor(old, value);
+                }
                 return Ok(());
             }
             let element = a.get_mut(*i).ok_or(format!("index {i} beyond the array"))?;
@@ -187,5 +206,28 @@ mod tests {
         for bad in ["", "a..b", ".a", "a[x]", "a[0]b", "a[0"] {
             assert_eq!(steps(bad), None, "{bad}");
         }
+    }
+
+    /// A changed value keeps the comments above its key and after its value (the flume's
+    /// header comment is the decoration of its first key, `title`).
+    #[test]
+    fn a_changed_value_keeps_the_comments_around_it() {
+        let text = crate::scenes::embedded_scene("flume").unwrap();
+        let flume = crate::validate::load_scene_str(text, "flume").unwrap();
+        let titled = flume.with_value("title", "\"renamed\"").unwrap();
+        assert!(titled.text().starts_with("# The dry-sand flume"), "{}", &titled.text()[..200]);
+        assert!(titled.text().contains("\ntitle = \"renamed\"\n"));
+        let quiet = flume.with_value("output.envelope", "false").unwrap();
+        assert!(quiet.text().contains("envelope = false        # envelope.csv, deposit.csv"));
+        let ground = flume.with_value("boundaries.ground.friction_angle_deg", "25.0").unwrap();
+        assert!(ground.text().contains("ground = { friction_angle_deg = 25.0 }"));
+        let probe = flume.with_value("output.probes[1].nearest[0]", "1.1").unwrap();
+        assert!(probe.text().contains("{ nearest = [1.1, 0.86] }]   # centre, front toe"));
+        // the same refusal as the file's, located in the edited text and naming the change
+        let e = flume.with_value("materials.sand.friction_angle_deg", "95.0").unwrap_err();
+        assert_eq!((e.path.as_str(), e.line), ("materials.sand.friction_angle_deg", Some(38)));
+        assert!(e.origin.contains("with materials.sand.friction_angle_deg = 95.0"), "{e}");
+        assert!(flume.with_value("bodies[7].min", "[0.0, 0.0]").is_err());
+        assert!(flume.with_value("solver.end_time", "3.0 4.0").is_err());
     }
 }
