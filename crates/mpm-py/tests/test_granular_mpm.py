@@ -6,6 +6,7 @@ examples' answers."""
 import _thread
 import json
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -132,6 +133,9 @@ def test_ctrl_c_stops_a_run_after_a_step_and_leaves_a_checkpoint(tmp_path):
     # the flume to 30 s runs for many seconds: the signal at 0.3 s finds it stepping
     out = tmp_path / "interrupted"
     scene = gm.Scene.embedded("flume").set("solver.end_time", 30.0)
+    # Python raises KeyboardInterrupt for SIGINT only with its default handler, which it does
+    # not install when started with SIGINT ignored (a background job of a script, as in CI)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.3, _thread.interrupt_main)
     timer.start()
     try:
@@ -139,6 +143,7 @@ def test_ctrl_c_stops_a_run_after_a_step_and_leaves_a_checkpoint(tmp_path):
             gm.run(scene, out=out)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     # what `mpm` leaves on Ctrl-C: the summary of an interrupted run and its checkpoint
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
