@@ -291,6 +291,25 @@ fn detached<T: Send>(
 /// the summary as JSON text and the run's messages.
 type Ran = (String, Vec<(bool, String)>);
 
+/// runs `work` (a run or a resume) with options that report to the waiting thread and stop on
+/// its signal, and hands the result to Python.
+fn drive(
+    py: Python<'_>,
+    progress: Option<Py<PyAny>>,
+    options: RunOptions,
+    work: impl FnOnce(&RunOptions) -> Result<mpm_run::RunSummary, RunError> + Send,
+) -> PyResult<Ran> {
+    let mut waiter = Waiter::new(progress);
+    let flag = Arc::new(AtomicBool::new(false));
+    let opts = RunOptions {
+        progress: ProgressSink(Some(waiter.watch.clone())),
+        interrupt: Some(flag.clone()),
+        ..options
+    };
+    let result = detached(py, &mut waiter, &flag, || work(&opts));
+    finish(py, waiter, result)
+}
+
 /// runs `scene` into `out` (see `granular_mpm.run`).
 #[pyfunction]
 #[pyo3(signature = (scene, out, threads = None, force = false, progress = None))]
@@ -302,19 +321,9 @@ fn run(
     force: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Ran> {
-    let mut waiter = Waiter::new(progress);
-    let flag = Arc::new(AtomicBool::new(false));
-    let opts = RunOptions {
-        out_dir: out,
-        threads,
-        progress: ProgressSink(Some(waiter.watch.clone())),
-        force,
-        stop_after: None,
-        interrupt: Some(flag.clone()),
-    };
+    let options = RunOptions { out_dir: out, threads, force, ..Default::default() };
     let scene = &scene.inner;
-    let result = detached(py, &mut waiter, &flag, || mpm_run::run_scene(scene, &opts));
-    finish(py, waiter, result)
+    drive(py, progress, options, |opts| mpm_run::run_scene(scene, opts))
 }
 
 /// continues the run in `out` from its checkpoint (see `granular_mpm.resume`).
@@ -326,18 +335,8 @@ fn resume(
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Ran> {
-    let mut waiter = Waiter::new(progress);
-    let flag = Arc::new(AtomicBool::new(false));
-    let opts = RunOptions {
-        out_dir: None,
-        threads,
-        progress: ProgressSink(Some(waiter.watch.clone())),
-        force: false,
-        stop_after: None,
-        interrupt: Some(flag.clone()),
-    };
-    let result = detached(py, &mut waiter, &flag, || mpm_run::resume(&out, &opts));
-    finish(py, waiter, result)
+    let options = RunOptions { threads, ..Default::default() };
+    drive(py, progress, options, |opts| mpm_run::resume(&out, opts))
 }
 
 /// a run's result for Python: a pending KeyboardInterrupt first, then the run's own error.
