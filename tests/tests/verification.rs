@@ -13,4 +13,5 @@ mod verification {
     pub mod objectivity;
     pub mod open_core;
     pub mod small_mass;
+    pub mod three_d;
 }

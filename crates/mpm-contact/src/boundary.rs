@@ -82,6 +82,7 @@ impl Boundary {
         self.normal
     }
 
+    #[cfg(not(feature = "dim3"))]
     /// the unit tangent t = (n_y, −n_x): n turned by −90°, so that (t, n) is right-handed like (x, y).
     ///
     /// For the ground (n = +y) the tangent is +x; on a slope rising to the right it points up-slope.
@@ -95,6 +96,7 @@ impl Boundary {
     }
 }
 
+#[cfg(not(feature = "dim3"))]
 /// the tangent convention of [`Boundary::tangent`] for a unit normal `n`.
 pub(crate) fn tangent_of(n: Vector) -> Vector {
     Vector::new(n.y, -n.x)

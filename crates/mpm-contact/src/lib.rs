@@ -24,6 +24,10 @@
 //! - n: unit normal of a boundary, pointing **from the boundary into the material** (the paper's eq 14
 //!   is written with the opposite sign convention; the physics, "the node presses on the wall", is the
 //!   same). t = (n_y, −n_x): unit tangent, (t, n) right-handed; for the ground (n = +y) t = +x.
+//!   In 3D (the `dim3` build, `mpm-contact3d`) a boundary has a tangent *plane*, and every
+//!   tangential quantity below is the vector in that plane (v_t = v − (v·n) n), its magnitude
+//!   taking the place of |v_t| and its direction that of sign(v_t): the same law, eqs 15–16
+//!   written for a vector.
 //! - μ: Coulomb friction coefficient, dimensionless; `Rough` and `Fixed` behave as μ = ∞.
 //! - m (kg), v (m/s), a (m/s²), Δt (s): nodal mass, start-of-step velocity, trial acceleration
 //!   (f_int + f_ext)/m (eq 4), time step.
@@ -82,7 +86,11 @@ mod sliding;
 mod wall;
 
 /// The vector type of the crate: a 2D f64 vector (x, y), SI units.
+#[cfg(not(feature = "dim3"))]
 pub type Vector = glam::DVec2;
+/// The vector type of the crate's 3D build (`mpm-contact3d`): a 3D f64 vector (x, y, z), SI units.
+#[cfg(feature = "dim3")]
+pub type Vector = glam::DVec3;
 
 pub use boundary::{Boundary, Friction, NORMAL_LENGTH_TOLERANCE};
 pub use corner::{FEASIBILITY_TOLERANCE, apply_all, constrain_velocity_all, try_apply_all};

@@ -21,8 +21,77 @@
 //!    - slide otherwise: a^c_t = a_t − sign(v\*_t) μ r and v^L_t = sign(v\*_t)(|v\*_t| − μ|v\*_n|), which
 //!      keeps the sign of v\*_t: friction never reverses the tangential velocity.
 
+#[cfg(not(feature = "dim3"))]
 use crate::boundary::tangent_of;
 use crate::{Boundary, ContactError, Friction, Vector};
+
+/// A tangential quantity: in the plane its coordinate along the tangent t (a signed scalar), in
+/// space the vector itself, lying in the tangent plane. The law below is written once over the
+/// few operations both provide.
+#[cfg(not(feature = "dim3"))]
+type Tangential = f64;
+/// A tangential quantity: in the plane its coordinate along the tangent t (a signed scalar), in
+/// space the vector itself, lying in the tangent plane.
+#[cfg(feature = "dim3")]
+type Tangential = Vector;
+
+/// the tangential part of `v` on a boundary with normal `n` and (2D) tangent `t`.
+#[inline(always)]
+fn tangential(v: Vector, n: Vector, t: Vector) -> Tangential {
+    #[cfg(not(feature = "dim3"))]
+    return {
+        let _ = n;
+        v.dot(t)
+    };
+    #[cfg(feature = "dim3")]
+    return {
+        let _ = t;
+        v - v.dot(n) * n
+    };
+}
+
+/// |x|.
+#[inline(always)]
+fn magnitude(x: Tangential) -> f64 {
+    #[cfg(not(feature = "dim3"))]
+    return x.abs();
+    #[cfg(feature = "dim3")]
+    return x.length();
+}
+
+/// the direction of x (sign(x) in the plane, x/|x| in space; x ≠ 0).
+#[inline(always)]
+fn direction(x: Tangential) -> Tangential {
+    #[cfg(not(feature = "dim3"))]
+    return x.signum();
+    #[cfg(feature = "dim3")]
+    return x / x.length();
+}
+
+/// a tangential quantity as a vector (x·t in the plane).
+#[inline(always)]
+fn as_vector(x: Tangential, t: Vector) -> Vector {
+    #[cfg(not(feature = "dim3"))]
+    return x * t;
+    #[cfg(feature = "dim3")]
+    return {
+        let _ = t;
+        x
+    };
+}
+
+/// the tangent a law is written with: t = (n_y, −n_x) in the plane; unused in space, where the
+/// tangential parts are vectors.
+#[inline(always)]
+fn tangent_for(n: Vector) -> Vector {
+    #[cfg(not(feature = "dim3"))]
+    return tangent_of(n);
+    #[cfg(feature = "dim3")]
+    return {
+        let _ = n;
+        Vector::ZERO
+    };
+}
 
 /// How a node ended the step with respect to its boundary (or boundaries).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,8 +175,8 @@ pub(crate) struct Face {
     t: Vector,
     /// v\*·n.
     vn_trial: f64,
-    /// v\*·t.
-    vt_trial: f64,
+    /// v\*·t (in 3D the tangential vector v\* − (v\*·n) n).
+    vt_trial: Tangential,
     /// the effective coefficient: μ, 0 (roller) or ∞ (rough, fixed).
     mu: f64,
     fixed: bool,
@@ -117,17 +186,19 @@ pub(crate) struct Face {
     capacity: f64,
     /// |v\*_t| within the friction capacity.
     stuck: bool,
-    /// v^L·t.
-    vt_end: f64,
+    /// v^L·t (in 3D the tangential vector of v^L).
+    vt_end: Tangential,
+    /// |v^L_t|, kept from the arithmetic that made it (the friction work's ≥ 0 rests on it).
+    vt_end_magnitude: f64,
 }
 
 impl Face {
     /// the verdict of boundary `b` on trial velocity `trial` under `law`.
     pub(crate) fn resolve(b: &Boundary, trial: Vector, law: Law) -> Self {
         let n = b.normal();
-        let t = tangent_of(n);
+        let t = tangent_for(n);
         let vn_trial = trial.dot(n);
-        let vt_trial = trial.dot(t);
+        let vt_trial = tangential(trial, n, t);
         let (mu, fixed) = match (b.friction(), law) {
             (Friction::Coulomb { mu }, Law::Step) => (mu, false),
             (Friction::Coulomb { .. }, Law::VelocityOnly) => (0.0, false),
@@ -137,21 +208,34 @@ impl Face {
         let engaged = fixed || vn_trial < 0.0;
         // Tangential impulse capacity per unit mass; ∞·0 is avoided by testing μ first.
         let capacity = if mu == f64::INFINITY { f64::INFINITY } else { mu * -vn_trial };
-        let stuck = engaged && vt_trial.abs() <= capacity;
-        let vt_end = if !engaged {
-            vt_trial
+        let stuck = engaged && magnitude(vt_trial) <= capacity;
+        let (vt_end, vt_end_magnitude) = if !engaged {
+            (vt_trial, magnitude(vt_trial))
         } else if stuck {
-            0.0
+            (Tangential::default(), 0.0)
         } else {
             // |v*_t| > capacity here, so the difference is > 0 in floating point too: no reversal.
-            vt_trial.signum() * (vt_trial.abs() - capacity)
+            let left = magnitude(vt_trial) - capacity;
+            (direction(vt_trial) * left, left)
         };
-        Self { n, t, vn_trial, vt_trial, mu, fixed, engaged, capacity, stuck, vt_end }
+        Self {
+            n,
+            t,
+            vn_trial,
+            vt_trial,
+            mu,
+            fixed,
+            engaged,
+            capacity,
+            stuck,
+            vt_end,
+            vt_end_magnitude,
+        }
     }
 
     /// v^L for an engaged face: the normal component is exactly zero.
     pub(crate) fn end_velocity(&self) -> Vector {
-        self.vt_end * self.t
+        as_vector(self.vt_end, self.t)
     }
 
     /// the status of an engaged face.
@@ -168,8 +252,8 @@ impl Face {
     /// the full outcome of an engaged face for a node of mass `mass` (≥ 0) with start-of-step velocity
     /// `v` and trial acceleration `a` over a valid `dt`.
     pub(crate) fn outcome(&self, mass: f64, v: Vector, a: Vector, dt: f64) -> ContactOutcome {
-        let (vn, vt) = (v.dot(self.n), v.dot(self.t));
-        let (an, at) = (a.dot(self.n), a.dot(self.t));
+        let (vn, vt) = (v.dot(self.n), tangential(v, self.n, self.t));
+        let (an, at) = (a.dot(self.n), tangential(a, self.n, self.t));
         // Eq 17 (and 18 through v^L = v + a^c Δt): the normal velocity ends at zero.
         let an_end = -vn / dt;
         let at_end = if self.stuck {
@@ -177,19 +261,22 @@ impl Face {
         } else {
             // Eq 16 with the reaction rate r; r = −a_n exactly when v_n = 0.
             let reaction = -(vn / dt + an);
-            at - self.vt_trial.signum() * self.mu * reaction
+            at - direction(self.vt_trial) * self.mu * reaction
         };
         let velocity = self.end_velocity();
         // v^L − v* from its components, free of the cancellation of subtracting two nearly equal speeds.
-        let dvt = if self.stuck { -self.vt_trial } else { -self.vt_trial.signum() * self.capacity };
+        let dvt =
+            if self.stuck { -self.vt_trial } else { -direction(self.vt_trial) * self.capacity };
+        let vt_trial = magnitude(self.vt_trial);
+        let vt_end = self.vt_end_magnitude;
         ContactOutcome {
-            acceleration: an_end * self.n + at_end * self.t,
+            acceleration: an_end * self.n + as_vector(at_end, self.t),
             velocity,
             status: self.status(),
             // |v^L_t| ≤ |v*_t| holds in floating point, and squaring is monotone, so this is ≥ 0.
-            friction_work: 0.5 * mass * (self.vt_trial * self.vt_trial - self.vt_end * self.vt_end),
+            friction_work: 0.5 * mass * (vt_trial * vt_trial - vt_end * vt_end),
             normal_work: 0.5 * mass * self.vn_trial * self.vn_trial,
-            impulse: mass * (-self.vn_trial * self.n + dvt * self.t),
+            impulse: mass * (-self.vn_trial * self.n + as_vector(dvt, self.t)),
         }
     }
 }

@@ -26,6 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
+#[cfg(not(feature = "dim3"))]
 use crate::boundary::tangent_of;
 use crate::{Boundary, ContactError, Friction, Vector};
 
@@ -62,6 +63,7 @@ impl Wall {
         })
     }
 
+    #[cfg(not(feature = "dim3"))]
     /// the segment from `from` to `to`, the material on its left (normal = the direction from → to
     /// turned by +90°), with a solid `thickness` m deep behind it (`f64::INFINITY`: all the way).
     pub fn segment(
@@ -122,8 +124,18 @@ impl Wall {
     /// face of at most `depth` m: s₀ − margin ≤ s(x) ≤ s₁ + margin and d(x) ≥ −depth.
     #[inline]
     fn covers(&self, x: Vector, margin: f64, depth: f64) -> bool {
-        let s = (x - self.point).dot(tangent_of(self.normal()));
-        s >= self.span[0] - margin && s <= self.span[1] + margin && self.distance(x) >= -depth
+        #[cfg(not(feature = "dim3"))]
+        let over = {
+            let s = (x - self.point).dot(tangent_of(self.normal()));
+            s >= self.span[0] - margin && s <= self.span[1] + margin
+        };
+        // a 3D wall is an unbounded plane: every point is over it
+        #[cfg(feature = "dim3")]
+        let over = {
+            let _ = margin;
+            true
+        };
+        over && self.distance(x) >= -depth
     }
 
     /// true when `x` lies inside the solid: over the span, behind the face, within the thickness.
@@ -184,7 +196,7 @@ impl<'de> Deserialize<'de> for Wall {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

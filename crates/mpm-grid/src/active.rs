@@ -3,7 +3,10 @@
 //!
 //! # Scheme
 //! Nodes are grouped in 8 × 8 blocks: block (bi, bj) = (i >> 3, j >> 3) (floor division, so
-//! negative ghost indices work), local bit (j & 7)·8 + (i & 7). A rebuild
+//! negative ghost indices work), local bit (j & 7)·8 + (i & 7). In 3D the blocks are
+//! 4 × 4 × 4, block (bi, bj, bk) = (i >> 2, j >> 2, k >> 2), local bit
+//! (k & 3)·16 + (j & 3)·4 + (i & 3), sorted by (bk, bj, bi): the same 64 nodes per block and
+//! everything below holds with the third index added. A rebuild
 //! 1. sets, for every node fed in (duplicates welcome), one bit in its block's 64-bit mask, the
 //!    block found through an open-addressing hash table (linear probing, Fibonacci hashing, load
 //!    ≤ ½) with a one-entry cache for runs of nodes in the same block;
@@ -23,9 +26,13 @@ use crate::node::NodeId;
 use crate::stencil::Stencil;
 
 /// log2 of the block side.
+#[cfg(not(feature = "dim3"))]
 const BLOCK_SHIFT: u32 = 3;
+/// log2 of the block side.
+#[cfg(feature = "dim3")]
+const BLOCK_SHIFT: u32 = 2;
 /// nodes along each side of a block: block (bi, bj) holds nodes i in [8 bi, 8 bi + 8) and
-/// j in [8 bj, 8 bj + 8).
+/// j in [8 bj, 8 bj + 8) (in 3D 4 along each of three sides).
 pub const BLOCK_SIDE: i32 = 1 << BLOCK_SHIFT;
 /// block side − 1, the mask of a node's position inside its block.
 const IN_BLOCK: i32 = (1 << BLOCK_SHIFT) - 1;
@@ -77,6 +84,7 @@ pub struct ActiveNodes {
     nodes: Vec<NodeId>,
 }
 
+#[cfg(not(feature = "dim3"))]
 #[inline(always)]
 fn split(node: NodeId) -> (u64, u32) {
     let bi = (node.i >> BLOCK_SHIFT) as u32 ^ 0x8000_0000;
@@ -85,11 +93,60 @@ fn split(node: NodeId) -> (u64, u32) {
     ((u64::from(bj) << 32) | u64::from(bi), bit)
 }
 
+#[cfg(not(feature = "dim3"))]
 #[inline(always)]
-fn block_origin(key: u64) -> (i32, i32) {
+fn block_origin(key: u64) -> NodeId {
     let bi = (key as u32 ^ 0x8000_0000) as i32;
     let bj = ((key >> 32) as u32 ^ 0x8000_0000) as i32;
-    (bi << BLOCK_SHIFT, bj << BLOCK_SHIFT)
+    NodeId::new(bi << BLOCK_SHIFT, bj << BLOCK_SHIFT)
+}
+
+/// the node at bit `bit` of the block whose lowest node is `origin`.
+#[cfg(not(feature = "dim3"))]
+#[inline(always)]
+fn node_at(origin: NodeId, bit: u32) -> NodeId {
+    let bit = bit as i32;
+    NodeId::new(origin.i + (bit & IN_BLOCK), origin.j + (bit >> BLOCK_SHIFT))
+}
+
+/// bits of each block index in a 3D key: 21, so that three fit 63 bits (nodes within ±2²²
+/// along each axis, which [`MAX_CELLS_PER_AXIS`](crate::MAX_CELLS_PER_AXIS) keeps).
+#[cfg(feature = "dim3")]
+const KEY_BITS: u32 = 21;
+/// added to a block index to make it non-negative in a 3D key.
+#[cfg(feature = "dim3")]
+const KEY_BIAS: i64 = 1 << (KEY_BITS - 1);
+
+/// a node's block key, (bk, bj, bi) biased to be non-negative and packed with bk highest,
+/// and its bit in the block.
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn split(node: NodeId) -> (u64, u32) {
+    let field = |n: i32| ((i64::from(n >> BLOCK_SHIFT) + KEY_BIAS) as u64) & ((1 << KEY_BITS) - 1);
+    let key = (field(node.k) << (2 * KEY_BITS)) | (field(node.j) << KEY_BITS) | field(node.i);
+    let bit = ((node.k & IN_BLOCK) << (2 * BLOCK_SHIFT))
+        | ((node.j & IN_BLOCK) << BLOCK_SHIFT)
+        | (node.i & IN_BLOCK);
+    (key, bit as u32)
+}
+
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn block_origin(key: u64) -> NodeId {
+    let index = |shift: u32| (((key >> shift) & ((1 << KEY_BITS) - 1)) as i64 - KEY_BIAS) as i32;
+    NodeId::new(
+        index(0) << BLOCK_SHIFT,
+        index(KEY_BITS) << BLOCK_SHIFT,
+        index(2 * KEY_BITS) << BLOCK_SHIFT,
+    )
+}
+
+/// the node at bit `bit` of the block whose lowest node is `origin`.
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn node_at(origin: NodeId, bit: u32) -> NodeId {
+    let bit = bit as i32;
+    origin.offset([bit & IN_BLOCK, (bit >> BLOCK_SHIFT) & IN_BLOCK, bit >> (2 * BLOCK_SHIFT)])
 }
 
 impl ActiveNodes {
@@ -181,7 +238,7 @@ impl ActiveNodes {
         self.blocks.sort_unstable_by_key(|b| b.key);
         for (rank, b) in self.blocks.iter().enumerate() {
             self.slots[b.slot as usize].value = rank as u32;
-            let (i0, j0) = block_origin(b.key);
+            let origin = block_origin(b.key);
             let mut table = BlockIndex { mask: b.mask, dense: [0; 64] };
             self.offsets.push(self.nodes.len());
             let mut m = b.mask;
@@ -189,8 +246,7 @@ impl ActiveNodes {
                 let bit = m.trailing_zeros();
                 // dense indices fit u32: 2³² nodes would need 32 GiB of NodeIds alone.
                 table.dense[bit as usize] = self.nodes.len() as u32;
-                let (di, dj) = ((bit as i32) & IN_BLOCK, (bit as i32) >> BLOCK_SHIFT);
-                self.nodes.push(NodeId::new(i0 + di, j0 + dj));
+                self.nodes.push(node_at(origin, bit));
                 m &= m - 1;
             }
             self.tables.push(table);
@@ -293,8 +349,7 @@ impl ActiveNodes {
 
     /// the lowest node (8 bi, 8 bj) of block `rank` (ranks follow [`Self::block_ranges`]).
     pub fn block_origin(&self, rank: usize) -> NodeId {
-        let (i, j) = block_origin(self.blocks[rank].key);
-        NodeId::new(i, j)
+        block_origin(self.blocks[rank].key)
     }
 
     /// the rank of the block holding `node`, if that block is active (it has some active
@@ -325,7 +380,7 @@ impl fmt::Debug for ActiveNodes {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 
@@ -334,8 +389,7 @@ mod tests {
         for (i, j) in [(0, 0), (-1, -1), (7, 8), (-9, 17), (i32::MAX, i32::MIN), (i32::MIN, 5)] {
             let (key, bit) = split(NodeId::new(i, j));
             assert_ne!(key, NO_KEY);
-            let (i0, j0) = block_origin(key);
-            assert_eq!((i0 + (bit as i32 & 7), j0 + (bit as i32 >> 3)), (i, j));
+            assert_eq!(node_at(block_origin(key), bit), NodeId::new(i, j));
         }
     }
 

@@ -18,6 +18,7 @@ use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
 use crate::stencil::ShapeFunctions;
+#[cfg(not(feature = "dim3"))]
 use crate::terrain::TerrainGrid;
 
 /// Bilinear isoparametric shape functions over grid `G` (a [`TerrainGrid`] or a
@@ -26,6 +27,7 @@ use crate::terrain::TerrainGrid;
 pub struct Bilinear<G>(pub G);
 
 /// the weights of the four corners at fractions (a, b).
+#[cfg(not(feature = "dim3"))]
 #[inline(always)]
 fn unit_square(a: f64, b: f64) -> [f64; 4] {
     let (am, bm) = (1.0 - a, 1.0 - b);
@@ -33,6 +35,7 @@ fn unit_square(a: f64, b: f64) -> [f64; 4] {
 }
 
 /// (∂N/∂a, ∂N/∂b) of the four corners at fractions (a, b).
+#[cfg(not(feature = "dim3"))]
 #[inline(always)]
 fn unit_square_slopes(a: f64, b: f64) -> ([f64; 4], [f64; 4]) {
     let (am, bm) = (1.0 - a, 1.0 - b);
@@ -40,6 +43,7 @@ fn unit_square_slopes(a: f64, b: f64) -> ([f64; 4], [f64; 4]) {
 }
 
 /// A point's fractions (a, b) across its terrain cell and the column's ∂b/∂x.
+#[cfg(not(feature = "dim3"))]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TerrainFactors {
     a: f64,
@@ -47,6 +51,7 @@ pub struct TerrainFactors {
     db_dx: f64,
 }
 
+#[cfg(not(feature = "dim3"))]
 impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
     type Factors = TerrainFactors;
 
@@ -84,6 +89,7 @@ impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
     }
 }
 
+#[cfg(not(feature = "dim3"))]
 impl ShapeFunctions<4> for Bilinear<RegularGrid> {
     /// the point's fractions (a, b) across its cell.
     type Factors = [f64; 2];
@@ -106,6 +112,54 @@ impl ShapeFunctions<4> for Bilinear<RegularGrid> {
         let inv = self.0.inverse_cell_size();
         let grad = |k: usize| Vector::new(na[k] * inv.x, nb[k] * inv.y);
         [grad(0), grad(1), grad(2), grad(3)]
+    }
+
+    fn node_position(&self, node: NodeId) -> Vector {
+        self.0.node_position(node)
+    }
+
+    fn min_cell_size(&self) -> f64 {
+        self.0.min_cell_size()
+    }
+
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        self.0.boundary_normals(node)
+    }
+}
+
+/// Trilinear shape functions on the regular 3D grid (the 3D build's [`Bilinear`]): the tensor
+/// product of the 1D hats, N = (1±ξ)(1±η)(1±ζ)/8, 8-node stencils in the slot order of
+/// [`Stencil`](crate::Stencil) (x fastest, then y, then z).
+#[cfg(feature = "dim3")]
+impl ShapeFunctions<8> for Bilinear<RegularGrid> {
+    /// the point's fractions (a, b, c) across its cell.
+    type Factors = [f64; 3];
+
+    #[inline(always)]
+    fn factors(&self, x: Vector) -> Result<(NodeId, [f64; 3]), LocateError> {
+        let g = &self.0;
+        Ok(g.cell_fractions(g.units_of(x)?))
+    }
+
+    #[inline(always)]
+    fn weights(&self, &[a, b, c]: &[f64; 3]) -> [f64; 8] {
+        let (x, y, z) = ([1.0 - a, a], [1.0 - b, b], [1.0 - c, c]);
+        std::array::from_fn(|k| x[k & 1] * y[(k >> 1) & 1] * z[k >> 2])
+    }
+
+    #[inline(always)]
+    fn gradients(&self, &[a, b, c]: &[f64; 3]) -> [Vector; 8] {
+        let (x, y, z) = ([1.0 - a, a], [1.0 - b, b], [1.0 - c, c]);
+        const SLOPE: [f64; 2] = [-1.0, 1.0];
+        let inv = self.0.inverse_cell_size();
+        std::array::from_fn(|k| {
+            let (p, q, r) = (k & 1, (k >> 1) & 1, k >> 2);
+            Vector::new(
+                SLOPE[p] * y[q] * z[r] * inv.x,
+                x[p] * SLOPE[q] * z[r] * inv.y,
+                x[p] * y[q] * SLOPE[r] * inv.z,
+            )
+        })
     }
 
     fn node_position(&self, node: NodeId) -> Vector {

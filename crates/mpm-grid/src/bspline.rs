@@ -24,7 +24,7 @@
 //! - units SI (m).
 
 use crate::error::LocateError;
-use crate::gimp::AxisFactors;
+use crate::gimp::{AxisFactors, WIDE};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
@@ -58,22 +58,25 @@ fn bspline_axis(u: f64) -> (i32, [(f64, f64); 3]) {
     (c, [(0.5 * m * m, -m), (0.75 - d * d, -2.0 * d), (0.5 * p * p, p)])
 }
 
-impl ShapeFunctions<9> for QuadraticBSpline {
+impl ShapeFunctions<WIDE> for QuadraticBSpline {
     type Factors = AxisFactors;
 
     #[inline(always)]
     fn factors(&self, x: Vector) -> Result<(NodeId, AxisFactors), LocateError> {
         let u = self.grid.units_of(x)?;
-        Ok(AxisFactors::centred(bspline_axis(u.x), bspline_axis(u.y)))
+        #[cfg(not(feature = "dim3"))]
+        return Ok(AxisFactors::centred(bspline_axis(u.x), bspline_axis(u.y)));
+        #[cfg(feature = "dim3")]
+        return Ok(AxisFactors::centred(bspline_axis(u.x), bspline_axis(u.y), bspline_axis(u.z)));
     }
 
     #[inline(always)]
-    fn weights(&self, f: &AxisFactors) -> [f64; 9] {
+    fn weights(&self, f: &AxisFactors) -> [f64; WIDE] {
         f.weights()
     }
 
     #[inline(always)]
-    fn gradients(&self, f: &AxisFactors) -> [Vector; 9] {
+    fn gradients(&self, f: &AxisFactors) -> [Vector; WIDE] {
         f.gradients(self.grid.inverse_cell_size())
     }
 

@@ -8,11 +8,11 @@ use crate::{Bilinear, Gimp, QuadraticBSpline, RegularGrid, ShapeFunctions};
 /// The shape functions a regular grid offers (the terrain grid offers bilinear only).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RegularShape {
-    /// bilinear (N = 4).
+    /// bilinear (N = 4; trilinear in 3D, N = 8).
     Bilinear,
-    /// uGIMP with the particle size of n × n particles per cell (N = 9).
+    /// uGIMP with the particle size of n × n (n × n × n) particles per cell (N = 9; 27 in 3D).
     Gimp,
-    /// quadratic B-splines (N = 9).
+    /// quadratic B-splines (N = 9; 27 in 3D).
     BSpline,
 }
 
@@ -40,7 +40,7 @@ pub trait ShapeJob {
 }
 
 /// Builds the shape functions `kind` on `grid` and runs `job` with them; uGIMP's particle size
-/// is that of `particles_per_cell` × `particles_per_cell` particles per cell (refused when 0).
+/// is that of `particles_per_cell` particles per cell along each axis (refused when 0).
 pub fn with_regular_shape<J: ShapeJob>(
     kind: RegularShape,
     grid: RegularGrid,
@@ -50,13 +50,13 @@ pub fn with_regular_shape<J: ShapeJob>(
     Ok(match kind {
         RegularShape::Bilinear => job.run(Bilinear(grid)),
         RegularShape::Gimp => {
-            job.run(Gimp::with_particles_per_cell(grid, [particles_per_cell; 2])?)
+            job.run(Gimp::with_particles_per_cell(grid, [particles_per_cell; crate::DIM])?)
         }
         RegularShape::BSpline => job.run(QuadraticBSpline::new(grid)),
     })
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
     use crate::Vector;

@@ -4,28 +4,52 @@
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum LocateError {
     /// a coordinate is NaN or infinite.
-    #[error("point ({x}, {y}) has a non-finite coordinate")]
+    #[cfg_attr(not(feature = "dim3"), error("point ({x}, {y}) has a non-finite coordinate"))]
+    #[cfg_attr(feature = "dim3", error("point ({x}, {y}, {z}) has a non-finite coordinate"))]
     NonFinite {
         /// x of the point, m.
         x: f64,
         /// y of the point, m.
         y: f64,
+        /// z of the point, m (3D builds only).
+        #[cfg(feature = "dim3")]
+        z: f64,
     },
     /// the point lies left or right of the grid's x range, or above its top row.
-    #[error("point ({x}, {y}) lies outside the grid (left, right or above it)")]
+    #[cfg_attr(
+        not(feature = "dim3"),
+        error("point ({x}, {y}) lies outside the grid (left, right or above it)")
+    )]
+    #[cfg_attr(
+        feature = "dim3",
+        error("point ({x}, {y}, {z}) lies outside the grid (beside or above it)")
+    )]
     Outside {
         /// x of the point, m.
         x: f64,
         /// y of the point, m.
         y: f64,
+        /// z of the point, m (3D builds only).
+        #[cfg(feature = "dim3")]
+        z: f64,
     },
     /// the point lies within the grid's x range but below the ground (or floor).
-    #[error("point ({x}, {y}) lies below the ground, whose height there is {ground_y}")]
+    #[cfg_attr(
+        not(feature = "dim3"),
+        error("point ({x}, {y}) lies below the ground, whose height there is {ground_y}")
+    )]
+    #[cfg_attr(
+        feature = "dim3",
+        error("point ({x}, {y}, {z}) lies below the ground, whose height there is {ground_y}")
+    )]
     BelowGround {
         /// x of the point, m.
         x: f64,
         /// y of the point, m.
         y: f64,
+        /// z of the point, m (3D builds only).
+        #[cfg(feature = "dim3")]
+        z: f64,
         /// height of the ground at x, m.
         ground_y: f64,
     },
@@ -97,7 +121,8 @@ pub enum GridError {
         value: f64,
     },
     /// a coordinate that must be finite is not.
-    #[error("{what} = ({x}, {y}) is not finite")]
+    #[cfg_attr(not(feature = "dim3"), error("{what} = ({x}, {y}) is not finite"))]
+    #[cfg_attr(feature = "dim3", error("{what} = ({x}, {y}, {z}) is not finite"))]
     NonFinitePoint {
         /// which point ("grid origin", "cell corner", …).
         what: &'static str,
@@ -105,6 +130,9 @@ pub enum GridError {
         x: f64,
         /// its y.
         y: f64,
+        /// its z (3D builds only).
+        #[cfg(feature = "dim3")]
+        z: f64,
     },
     /// a grid needs at least one cell along each axis and at most [`MAX_CELLS_PER_AXIS`](crate::MAX_CELLS_PER_AXIS).
     #[error("{what} = {count} is out of range (1 ..= {max})")]
@@ -151,4 +179,40 @@ pub enum GridError {
         /// half the cell size along that axis, m.
         max: f64,
     },
+}
+
+impl LocateError {
+    /// a point with a non-finite coordinate.
+    pub fn non_finite(p: crate::Vector) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self::NonFinite { x: p.x, y: p.y };
+        #[cfg(feature = "dim3")]
+        return Self::NonFinite { x: p.x, y: p.y, z: p.z };
+    }
+
+    /// a point beside or above the grid.
+    pub fn outside(p: crate::Vector) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self::Outside { x: p.x, y: p.y };
+        #[cfg(feature = "dim3")]
+        return Self::Outside { x: p.x, y: p.y, z: p.z };
+    }
+
+    /// a point below the ground, whose height there is `ground_y`.
+    pub fn below_ground(p: crate::Vector, ground_y: f64) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self::BelowGround { x: p.x, y: p.y, ground_y };
+        #[cfg(feature = "dim3")]
+        return Self::BelowGround { x: p.x, y: p.y, z: p.z, ground_y };
+    }
+}
+
+impl GridError {
+    /// `what` (a point) has a non-finite coordinate.
+    pub fn non_finite_point(what: &'static str, p: crate::Vector) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self::NonFinitePoint { what, x: p.x, y: p.y };
+        #[cfg(feature = "dim3")]
+        return Self::NonFinitePoint { what, x: p.x, y: p.y, z: p.z };
+    }
 }

@@ -26,7 +26,7 @@
 //! - units SI (m).
 
 use crate::error::{GridError, LocateError};
-use crate::math::Vector;
+use crate::math::{DIM, Vector};
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
 use crate::stencil::ShapeFunctions;
@@ -37,27 +37,37 @@ pub struct Gimp {
     grid: RegularGrid,
     half_particle: Vector,
     /// lp / h and its reciprocals, per axis.
-    axes: [GimpAxis; 2],
+    axes: [GimpAxis; DIM],
 }
 
+/// the nodes of a 3-wide tensor-product stencil: 9 in the plane, 27 in space.
+pub const WIDE: usize = 3usize.pow(DIM as u32);
+
 impl Gimp {
-    /// uGIMP with particle half-size `half_particle` = (lp_x, lp_y), each in (0, cell/2].
+    /// uGIMP with particle half-size `half_particle` = (lp_x, lp_y[, lp_z]), each in (0, cell/2].
     pub fn new(grid: RegularGrid, half_particle: Vector) -> Result<Self, GridError> {
         let cell = grid.cell_size();
-        for (axis, value, h) in [("x", half_particle.x, cell.x), ("y", half_particle.y, cell.y)] {
+        for (a, axis) in ["x", "y", "z"].into_iter().enumerate().take(DIM) {
+            let (value, h) = (half_particle[a], cell[a]);
             if !(value > 0.0 && value <= 0.5 * h) {
                 return Err(GridError::InvalidParticleHalfSize { axis, value, max: 0.5 * h });
             }
         }
         let p = half_particle / cell;
-        Ok(Self { grid, half_particle, axes: [GimpAxis::new(p.x), GimpAxis::new(p.y)] })
+        Ok(Self { grid, half_particle, axes: std::array::from_fn(|a| GimpAxis::new(p[a])) })
     }
 
-    /// uGIMP for `ppc` = [n_x, n_y] particles per cell along each axis: lp = cell/(2·n).
-    pub fn with_particles_per_cell(grid: RegularGrid, ppc: [usize; 2]) -> Result<Self, GridError> {
-        for (what, n) in
-            [("particles per cell along x", ppc[0]), ("particles per cell along y", ppc[1])]
-        {
+    /// uGIMP for `ppc` = [n_x, n_y[, n_z]] particles per cell along each axis: lp = cell/(2·n).
+    pub fn with_particles_per_cell(
+        grid: RegularGrid,
+        ppc: [usize; DIM],
+    ) -> Result<Self, GridError> {
+        const NAMES: [&str; 3] = [
+            "particles per cell along x",
+            "particles per cell along y",
+            "particles per cell along z",
+        ];
+        for (what, n) in NAMES.into_iter().zip(ppc) {
             if n == 0 || n > crate::MAX_CELLS_PER_AXIS {
                 return Err(GridError::CellCountOutOfRange {
                     what,
@@ -66,7 +76,7 @@ impl Gimp {
                 });
             }
         }
-        let lp = grid.cell_size() / Vector::new(2.0 * ppc[0] as f64, 2.0 * ppc[1] as f64);
+        let lp = grid.cell_size() / Vector::from_array(ppc.map(|n| 2.0 * n as f64));
         Self::new(grid, lp)
     }
 
@@ -75,7 +85,7 @@ impl Gimp {
         &self.grid
     }
 
-    /// (lp_x, lp_y), m.
+    /// (lp_x, lp_y[, lp_z]), m.
     pub fn half_particle(&self) -> Vector {
         self.half_particle
     }
@@ -129,16 +139,19 @@ fn gimp_axis(u: f64, axis: &GimpAxis) -> (i32, [(f64, f64); 3]) {
     (c, [axis.weight(1.0 + d), axis.weight(d), axis.weight(d - 1.0)])
 }
 
-/// The 1D (weight, d/du) pairs of a 3 × 3 tensor-product stencil along x and along y, for
-/// nodes c − 1, c, c + 1 of each axis.
+/// The 1D (weight, d/du) pairs of a 3 × 3 (3 × 3 × 3 in 3D) tensor-product stencil along x,
+/// along y (and along z), for nodes c − 1, c, c + 1 of each axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AxisFactors {
     x: [(f64, f64); 3],
     y: [(f64, f64); 3],
+    #[cfg(feature = "dim3")]
+    z: [(f64, f64); 3],
 }
 
 impl AxisFactors {
     /// the factors of the stencil centred on node (cx, cy): its first node and the pairs.
+    #[cfg(not(feature = "dim3"))]
     #[inline(always)]
     pub(crate) fn centred(
         (cx, x): (i32, [(f64, f64); 3]),
@@ -147,38 +160,74 @@ impl AxisFactors {
         (NodeId::new(cx - 1, cy - 1), Self { x, y })
     }
 
-    /// the tensor-product weights, slot k = 3 b + a for node (a, b) of the 3 × 3.
+    /// the factors of the stencil centred on node (cx, cy, cz): its first node and the pairs.
+    #[cfg(feature = "dim3")]
     #[inline(always)]
-    pub(crate) fn weights(&self) -> [f64; 9] {
-        std::array::from_fn(|k| self.x[k % 3].0 * self.y[k / 3].0)
+    pub(crate) fn centred(
+        (cx, x): (i32, [(f64, f64); 3]),
+        (cy, y): (i32, [(f64, f64); 3]),
+        (cz, z): (i32, [(f64, f64); 3]),
+    ) -> (NodeId, Self) {
+        (NodeId::new(cx - 1, cy - 1, cz - 1), Self { x, y, z })
+    }
+
+    /// the tensor-product weights, slot k = 3 b + a for node (a, b) of the 3 × 3 (in 3D
+    /// k = 9 c + 3 b + a for node (a, b, c)).
+    #[inline(always)]
+    pub(crate) fn weights(&self) -> [f64; WIDE] {
+        #[cfg(not(feature = "dim3"))]
+        return std::array::from_fn(|k| self.x[k % 3].0 * self.y[k / 3].0);
+        #[cfg(feature = "dim3")]
+        return std::array::from_fn(|k| self.x[k % 3].0 * self.y[(k / 3) % 3].0 * self.z[k / 9].0);
     }
 
     /// the tensor-product gradients (1/m) with cell units scaled by `inv_cell`.
     #[inline(always)]
-    pub(crate) fn gradients(&self, inv_cell: Vector) -> [Vector; 9] {
-        std::array::from_fn(|k| {
+    pub(crate) fn gradients(&self, inv_cell: Vector) -> [Vector; WIDE] {
+        #[cfg(not(feature = "dim3"))]
+        return std::array::from_fn(|k| {
             let ((sx, dx), (sy, dy)) = (self.x[k % 3], self.y[k / 3]);
             Vector::new(dx * sy * inv_cell.x, sx * dy * inv_cell.y)
-        })
+        });
+        #[cfg(feature = "dim3")]
+        return std::array::from_fn(|k| {
+            let ((sx, dx), (sy, dy), (sz, dz)) =
+                (self.x[k % 3], self.y[(k / 3) % 3], self.z[k / 9]);
+            Vector::new(
+                dx * sy * sz * inv_cell.x,
+                sx * dy * sz * inv_cell.y,
+                sx * sy * dz * inv_cell.z,
+            )
+        });
     }
 }
 
-impl ShapeFunctions<9> for Gimp {
+impl ShapeFunctions<WIDE> for Gimp {
     type Factors = AxisFactors;
 
     #[inline(always)]
     fn factors(&self, x: Vector) -> Result<(NodeId, AxisFactors), LocateError> {
         let u = self.grid.units_of(x)?;
-        Ok(AxisFactors::centred(gimp_axis(u.x, &self.axes[0]), gimp_axis(u.y, &self.axes[1])))
+        #[cfg(not(feature = "dim3"))]
+        return Ok(AxisFactors::centred(
+            gimp_axis(u.x, &self.axes[0]),
+            gimp_axis(u.y, &self.axes[1]),
+        ));
+        #[cfg(feature = "dim3")]
+        return Ok(AxisFactors::centred(
+            gimp_axis(u.x, &self.axes[0]),
+            gimp_axis(u.y, &self.axes[1]),
+            gimp_axis(u.z, &self.axes[2]),
+        ));
     }
 
     #[inline(always)]
-    fn weights(&self, f: &AxisFactors) -> [f64; 9] {
+    fn weights(&self, f: &AxisFactors) -> [f64; WIDE] {
         f.weights()
     }
 
     #[inline(always)]
-    fn gradients(&self, f: &AxisFactors) -> [Vector; 9] {
+    fn gradients(&self, f: &AxisFactors) -> [Vector; WIDE] {
         f.gradients(self.grid.inverse_cell_size())
     }
 
@@ -199,7 +248,7 @@ impl ShapeFunctions<9> for Gimp {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

@@ -58,28 +58,40 @@ mod gimp;
 pub mod math;
 mod node;
 mod regular;
+#[cfg(not(feature = "dim3"))]
 mod skewed_cell;
 mod stencil;
+#[cfg(not(feature = "dim3"))]
 mod terrain;
 
 pub use active::{ActiveNodes, BLOCK_SIDE};
-pub use bilinear::{Bilinear, TerrainFactors};
+pub use bilinear::Bilinear;
+#[cfg(not(feature = "dim3"))]
+pub use bilinear::TerrainFactors;
 pub use bspline::QuadraticBSpline;
 pub use dispatch::{RegularShape, ShapeJob, with_regular_shape};
 pub use error::{GridError, LocateError};
-pub use gimp::{AxisFactors, Gimp};
-pub use math::{Matrix, Real, Vector};
+pub use gimp::{AxisFactors, Gimp, WIDE};
+pub use math::{DIM, Matrix, Real, Vector};
 pub use node::{BoundaryNormals, CellCoords, NodeId};
 pub use regular::RegularGrid;
+#[cfg(not(feature = "dim3"))]
 pub use skewed_cell::SkewedCell;
-pub use stencil::{ShapeFunctions, Stencil, stencil_nodes, stencil_side};
+pub use stencil::{ShapeFunctions, Stencil, slot_offset, stencil_nodes, stencil_side};
+#[cfg(not(feature = "dim3"))]
 pub use terrain::{
     AdjacentSegments, GroundSegment, KINK_TOLERANCE, KinkPolicy, TerrainGrid, TerrainGridSpec,
 };
 
 /// most cells (or rows, or columns) along one axis: 2³⁰, so that node indices, ghost layers and
 /// i + 1 stay far from i32 overflow.
+#[cfg(not(feature = "dim3"))]
 pub const MAX_CELLS_PER_AXIS: usize = 1 << 30;
+/// most cells along one axis in 3D: 2²¹, so that the three block indices of a node pack into
+/// one 64-bit key of the active-node set (and 2²¹ cells along each of three axes is far more
+/// than any memory holds).
+#[cfg(feature = "dim3")]
+pub const MAX_CELLS_PER_AXIS: usize = 1 << 21;
 
 /// how far beyond the grid's edges (and below the ground), in cells, a point is still located
 /// in the edge cell rather than rejected: 1e-9 of a cell, far above the round-off of positions

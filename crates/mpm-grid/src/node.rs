@@ -18,12 +18,49 @@ pub struct NodeId {
     pub i: i32,
     /// row, upwards from the ground (j = 0).
     pub j: i32,
+    /// layer, along z (3D builds only).
+    #[cfg(feature = "dim3")]
+    pub k: i32,
 }
 
 impl NodeId {
     /// the node in column `i`, row `j`.
+    #[cfg(not(feature = "dim3"))]
     pub const fn new(i: i32, j: i32) -> Self {
         Self { i, j }
+    }
+
+    /// the node in column `i`, row `j`, layer `k`.
+    #[cfg(feature = "dim3")]
+    pub const fn new(i: i32, j: i32, k: i32) -> Self {
+        Self { i, j, k }
+    }
+
+    /// the node's index along each axis (i, j[, k]).
+    #[inline(always)]
+    pub const fn axes(self) -> [i32; crate::math::DIM] {
+        #[cfg(not(feature = "dim3"))]
+        return [self.i, self.j];
+        #[cfg(feature = "dim3")]
+        return [self.i, self.j, self.k];
+    }
+
+    /// the node with indices `a` along the axes.
+    #[inline(always)]
+    pub const fn from_axes(a: [i32; crate::math::DIM]) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self { i: a[0], j: a[1] };
+        #[cfg(feature = "dim3")]
+        return Self { i: a[0], j: a[1], k: a[2] };
+    }
+
+    /// this node moved by `d` nodes along the axes.
+    #[inline(always)]
+    pub const fn offset(self, d: [i32; crate::math::DIM]) -> Self {
+        #[cfg(not(feature = "dim3"))]
+        return Self { i: self.i + d[0], j: self.j + d[1] };
+        #[cfg(feature = "dim3")]
+        return Self { i: self.i + d[0], j: self.j + d[1], k: self.k + d[2] };
     }
 }
 
@@ -45,20 +82,35 @@ pub struct BoundaryNormals {
     pub left_wall: Option<Vector>,
     /// right wall (column i ≥ last column): normal −x.
     pub right_wall: Option<Vector>,
+    /// back wall (layer k ≤ 0, 3D builds only): normal +z.
+    #[cfg(feature = "dim3")]
+    pub back_wall: Option<Vector>,
+    /// front wall (layer k ≥ last layer, 3D builds only): normal −z.
+    #[cfg(feature = "dim3")]
+    pub front_wall: Option<Vector>,
 }
 
 impl BoundaryNormals {
     /// true when the node lies on no boundary plane.
     pub fn is_empty(&self) -> bool {
-        self.ground.is_none()
-            && self.ground_kink.is_none()
-            && self.left_wall.is_none()
-            && self.right_wall.is_none()
+        self.iter().next().is_none()
     }
 
-    /// the normals present, in the order ground, ground kink, left wall, right wall.
+    /// the normals present, in the order ground, ground kink, left wall, right wall (then back
+    /// and front wall in 3D).
     pub fn iter(&self) -> impl Iterator<Item = Vector> + '_ {
-        [self.ground, self.ground_kink, self.left_wall, self.right_wall].into_iter().flatten()
+        #[cfg(not(feature = "dim3"))]
+        let all = [self.ground, self.ground_kink, self.left_wall, self.right_wall];
+        #[cfg(feature = "dim3")]
+        let all = [
+            self.ground,
+            self.ground_kink,
+            self.left_wall,
+            self.right_wall,
+            self.back_wall,
+            self.front_wall,
+        ];
+        all.into_iter().flatten()
     }
 }
 
@@ -74,4 +126,7 @@ pub struct CellCoords {
     pub xi: f64,
     /// η, across the rows (eq 20).
     pub eta: f64,
+    /// ζ, across the layers (3D builds only).
+    #[cfg(feature = "dim3")]
+    pub zeta: f64,
 }

@@ -1,7 +1,7 @@
 //! The fixed-size stencil of a point and the one interface over every grid + shape-function pair.
 
 use crate::error::LocateError;
-use crate::math::Vector;
+use crate::math::{DIM, Vector};
 use crate::node::{BoundaryNormals, NodeId};
 
 /// Fixed-size stencil: the nodes whose support contains a point, with weights N_i(x) and
@@ -11,8 +11,9 @@ use crate::node::{BoundaryNormals, NodeId};
 /// appear with weight zero (a point on a cell edge, a point at a uGIMP support's rim); no node
 /// appears twice.
 ///
-/// Every stencil is a tensor product of w × w nodes, w = [`stencil_side`]`(N)`: slot k holds
-/// node `nodes[0]` + (k mod w, k div w), so `nodes[0]` is its lowest (i, j) corner. Solvers
+/// Every stencil is a tensor product of w × w nodes (w × w × w in 3D), w =
+/// [`stencil_side`]`(N)`: slot k holds node `nodes[0]` + (k mod w, k div w) (in 3D
+/// `nodes[0]` + (k mod w, (k div w) mod w, k div w²)), so `nodes[0]` is its lowest corner. Solvers
 /// rely on this to scatter a particle into a block-local patch of nodes from its first node alone.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencil<const N: usize> {
@@ -31,14 +32,25 @@ impl<const N: usize> Stencil<N> {
     }
 }
 
-/// the side w of a w × w tensor-product stencil of `n` nodes (2 for 4 nodes, 3 for 9).
+/// the side w of a w × w (w × w × w in 3D) tensor-product stencil of `n` nodes (2 for 4 nodes,
+/// 3 for 9; in 3D 2 for 8, 3 for 27).
 pub const fn stencil_side(n: usize) -> usize {
-    let mut w = 1;
-    while w * w < n {
+    let mut w: usize = 1;
+    while w.pow(DIM as u32) < n {
         w += 1;
     }
-    assert!(w * w == n, "a stencil is a square of nodes");
+    assert!(w.pow(DIM as u32) == n, "a stencil is a square (a cube in 3D) of nodes");
     w
+}
+
+/// the offset of slot `k` of a stencil of side `w` from its first node (the layout of
+/// [`Stencil`]).
+#[inline(always)]
+pub const fn slot_offset(k: usize, w: usize) -> [i32; DIM] {
+    #[cfg(not(feature = "dim3"))]
+    return [(k % w) as i32, (k / w) as i32];
+    #[cfg(feature = "dim3")]
+    return [(k % w) as i32, ((k / w) % w) as i32, (k / (w * w)) as i32];
 }
 
 /// the nodes of the `N`-node stencil whose first (lowest) node is `first`, in slot order: slot k
@@ -47,12 +59,13 @@ pub const fn stencil_side(n: usize) -> usize {
 #[inline(always)]
 pub fn stencil_nodes<const N: usize>(first: NodeId) -> [NodeId; N] {
     let w = stencil_side(N);
-    std::array::from_fn(|k| NodeId::new(first.i + (k % w) as i32, first.j + (k / w) as i32))
+    std::array::from_fn(|k| first.offset(slot_offset(k, w)))
 }
 
 /// One interface over every grid + shape-function pair (no allocation, no dyn).
 ///
-/// `N` is the stencil size: 4 for bilinear, 9 for uGIMP and quadratic B-splines.
+/// `N` is the stencil size: 4 for bilinear, 9 for uGIMP and quadratic B-splines (in 3D 8 and
+/// 27).
 pub trait ShapeFunctions<const N: usize>: Send + Sync {
     /// The few numbers a point's N weights and N gradients are computed from (its fractions
     /// across a cell, or its 1D weights along each axis). A solver may keep these per particle

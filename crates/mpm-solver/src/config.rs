@@ -140,12 +140,37 @@ pub struct Boundaries {
     pub left_wall: Option<Friction>,
     /// The wall at the grid's last column.
     pub right_wall: Option<Friction>,
+    /// The wall at the grid's first layer (z = z₀; 3D only).
+    #[cfg(feature = "dim3")]
+    #[serde(default)]
+    pub back_wall: Option<Friction>,
+    /// The wall at the grid's last layer (3D only).
+    #[cfg(feature = "dim3")]
+    #[serde(default)]
+    pub front_wall: Option<Friction>,
 }
 
 impl Boundaries {
     /// true when at least one of the grid's sides is a boundary.
     pub fn any(&self) -> bool {
+        #[cfg(feature = "dim3")]
+        if self.back_wall.is_some() || self.front_wall.is_some() {
+            return true;
+        }
         self.ground.is_some() || self.left_wall.is_some() || self.right_wall.is_some()
+    }
+
+    /// every side of the grid with the same friction law (the ground, the walls).
+    pub fn all(friction: Friction) -> Self {
+        Self {
+            ground: Some(friction),
+            left_wall: Some(friction),
+            right_wall: Some(friction),
+            #[cfg(feature = "dim3")]
+            back_wall: Some(friction),
+            #[cfg(feature = "dim3")]
+            front_wall: Some(friction),
+        }
     }
 }
 
@@ -232,7 +257,7 @@ impl Default for SolverConfig {
         Self {
             scheme: Scheme::default(),
             time_step: TimeStep::default(),
-            gravity: Vector::new(0.0, -STANDARD_GRAVITY),
+            gravity: Vector::NEG_Y * STANDARD_GRAVITY,
             boundaries: Boundaries::default(),
             periodic: None,
             walls: Vec::new(),
@@ -323,7 +348,9 @@ impl SolverConfig {
             });
         }
         if self.mass == MassMatrix::Consistent {
-            let conflict = if self.transfer == Transfer::Apic {
+            let conflict = if cfg!(feature = "dim3") {
+                Some(("dimension", "the 3D solver has the lumped mass matrix only: use `lumped`"))
+            } else if self.transfer == Transfer::Apic {
                 // APIC's affine matrix picks up velocity modes that the consistent projection
                 // leaves to the gradients: a thrown sand block blew up within 6 steps (measured).
                 Some(("transfer", "the consistent mass matrix is unstable with APIC: use FLIP"))

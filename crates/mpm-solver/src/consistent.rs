@@ -3,6 +3,9 @@
 //! from the stage so that the solver's scratch memory can hold it without depending on the
 //! stage.
 
+// the 3D build has the lumped matrix only (`stages/mass.rs`)
+#![cfg_attr(feature = "dim3", allow(dead_code))]
+
 use crate::math::{Real, Vector};
 
 /// Which system a consistent solve is for (named in errors).

@@ -169,24 +169,7 @@ fn lattice(
     }
 }
 
-/// even-odd rule point-in-polygon test: true when `p` is strictly inside the polygon with these
-/// vertices (points on an edge may fall either way).
-pub fn inside_polygon(vertices: &[Vector], p: Vector) -> bool {
-    let mut inside = false;
-    let n = vertices.len();
-    let mut j = n - 1;
-    for i in 0..n {
-        let (a, b) = (vertices[i], vertices[j]);
-        if (a.y > p.y) != (b.y > p.y) {
-            let x_cross = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
-            if p.x < x_cross {
-                inside = !inside;
-            }
-        }
-        j = i;
-    }
-    inside
-}
+pub use crate::polygon::inside_polygon;
 
 #[cfg(test)]
 mod tests {

@@ -47,12 +47,19 @@ pub mod config;
 mod consistent;
 pub mod energy;
 pub mod error;
+#[cfg(not(feature = "dim3"))]
 pub mod generate;
+/// Particle generation in 3D: boxes, cylinders and prisms.
+#[cfg(feature = "dim3")]
+#[path = "generate3d.rs"]
+pub mod generate;
+#[cfg(not(feature = "dim3"))]
 pub mod geostatic;
 pub mod math;
 mod par;
 pub use par::{PARTICLES_PER_THREAD, useful_threads};
 pub mod particles;
+mod polygon;
 mod report;
 mod scratch;
 mod setup;
@@ -66,8 +73,9 @@ pub use config::{
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
+#[cfg(not(feature = "dim3"))]
 pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleReport};
-pub use math::{Matrix, Real, Vector};
+pub use math::{DIM, Matrix, Real, Stress, Vector};
 pub use particles::{NewParticle, Particles};
 pub use report::{BranchCounts, Checkpoint, RunEnd, StepReport};
 pub use setup::estimated_bytes;

@@ -5,8 +5,7 @@
 //! **tension positive**, the four components plane strain leaves (σ_zz carried, σ_yz = σ_zx = 0).
 //! Each array has one entry per particle; index p refers to the same particle in every array.
 
-use crate::math::{Matrix, Real, Vector};
-use mpm_constitutive::PlaneTensor;
+use crate::math::{Matrix, Real, Stress, Vector};
 use serde::{Deserialize, Serialize};
 
 /// All particles of a scene. `S` is the constitutive model's internal state (`()` for elasticity).
@@ -21,7 +20,7 @@ pub struct Particles<S> {
     /// Current volume V_p (m² per metre of thickness), updated by eq 12.
     pub volume: Vec<Real>,
     /// Cauchy stress σ_p (Pa, tension positive; `[xx, yy, zz, xy]`).
-    pub stress: Vec<PlaneTensor>,
+    pub stress: Vec<Stress>,
     /// Constitutive internal variables.
     pub state: Vec<S>,
     /// Index into the solver's material list.
@@ -65,7 +64,7 @@ pub struct NewParticle<S> {
     /// Density (kg/m³).
     pub density: Real,
     /// Initial stress (Pa, tension positive).
-    pub stress: PlaneTensor,
+    pub stress: Stress,
     /// Initial internal state.
     pub state: S,
     /// Material index.
@@ -89,7 +88,7 @@ impl<S> NewParticle<S> {
             velocity,
             volume,
             density,
-            stress: PlaneTensor::ZERO,
+            stress: Stress::ZERO,
             state,
             material: 0,
             body: 0,

@@ -9,6 +9,8 @@ use mpm_grid::{ActiveNodes, NodeId};
 use crate::consistent::ConsistentScratch;
 use crate::math::{Real, Vector};
 
+/// the blocks whose patches overlap a block's nodes, its own excluded: 2^DIM − 1.
+pub(crate) const NEIGHBOURS: usize = (1 << crate::math::DIM) - 1;
 /// A node that a boundary may hold: its dense index and the planes near it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoundaryNode {
@@ -113,8 +115,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) node_block: Vec<u32>,
     pub(crate) node_local: Vec<u8>,
     /// Each block's neighbours below-left, below and left (`u32::MAX` where inactive): the
-    /// blocks whose patches overlap it.
-    pub(crate) neighbours: Vec<[u32; 3]>,
+    /// blocks whose patches overlap it (in 3D the seven blocks at offsets in {−1, 0}³ other
+    /// than its own; `stages/locate.rs` `index_blocks` gives the order).
+    pub(crate) neighbours: Vec<[u32; NEIGHBOURS]>,
     /// Per-block patches of partial particle-to-grid sums (`p2g.rs`).
     pub(crate) patch_mass: Vec<Real>,
     pub(crate) patch_momentum: Vec<Vector>,
@@ -237,7 +240,7 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.base.capacity()
             + self.node_local.capacity()
             + self.referenced.capacity()
-            + self.neighbours.capacity() * size_of::<[u32; 3]>()
+            + self.neighbours.capacity() * size_of::<[u32; NEIGHBOURS]>()
             + self.patch_mass.capacity() * size_of::<Real>()
             + (self.patch_momentum.capacity() + self.patch_force.capacity()) * size_of::<Vector>()
             + self.mass.capacity() * size_of::<Real>()

@@ -2,7 +2,6 @@
 //! reference density it derives from them, and the memory a solver will hold, estimated before
 //! anything is built.
 
-use mpm_constitutive::PlaneTensor;
 use mpm_contact::Wall;
 use mpm_grid::NodeId;
 
@@ -29,7 +28,7 @@ pub fn estimated_bytes(
 ) -> u64 {
     let per_particle = 3 * size_of::<Vector>()
         + 2 * size_of::<Real>()
-        + size_of::<PlaneTensor>()
+        + size_of::<crate::math::Stress>()
         + state_bytes
         + 2 * size_of::<u16>()
         + if apic { size_of::<Matrix>() } else { 0 }

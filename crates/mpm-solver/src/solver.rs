@@ -20,7 +20,7 @@
 
 use std::ops::ControlFlow;
 
-use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor};
+use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES};
 use mpm_grid::{NodeId, ShapeFunctions};
 
 use crate::config::{Scheme, SolverConfig, Transfer};
@@ -261,6 +261,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// whether the flag of [`set_interrupt`](Self::set_interrupt) is raised.
+    #[cfg_attr(feature = "dim3", allow(dead_code))] // used by the implicit initial state
     pub(crate) fn interrupted(&self) -> bool {
         self.interrupt.as_ref().is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
     }
@@ -367,7 +368,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let p = &self.particles;
         p.position.capacity() * size_of::<Vector>() * 3
             + (p.mass.capacity() + p.volume.capacity()) * size_of::<Real>()
-            + p.stress.capacity() * size_of::<PlaneTensor>()
+            + p.stress.capacity() * size_of::<crate::math::Stress>()
             + p.state.capacity() * size_of::<M::State>()
             + (p.material.capacity() + p.body.capacity()) * size_of::<u16>()
             + p.affine.capacity() * size_of::<Matrix>()
@@ -382,7 +383,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let kinetic = par::sum(p.len(), |i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
         let strain = par::sum(p.len(), |i| {
             let m = &self.materials[usize::from(p.material[i])];
-            p.volume[i] * m.stored_energy_density(&p.stress[i].to_sym(), &p.state[i])
+            p.volume[i]
+                * m.stored_energy_density(&crate::math::full_stress(&p.stress[i]), &p.state[i])
         });
         let potential = par::sum(p.len(), |i| -p.mass[i] * g.dot(p.position[i]));
         let mut e = EnergyLedger {

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::config::Transfer;
 use crate::error::{Field, SolverError};
-use crate::math::{Matrix, Real, Vector};
+use crate::math::{Matrix, Real, Vector, outer};
 use crate::par::chunk_len;
 use crate::solver::Solver;
 
@@ -145,7 +145,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         let v_end = v[i] + a[i] * dt;
                         v_new += w[k] * v_end;
                         let g = grad[k];
-                        c_new += Matrix::from_cols(v_end * g.x, v_end * g.y);
+                        c_new += outer(v_end, g);
                     }
                     let x_new = *x + dt * v_new;
                     check_finite(step, q, *x, x_new, v_new)?;

@@ -95,7 +95,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     || surface
                         && list().iter().any(|e| {
                             let q = e.load(Ordering::Relaxed) as usize / N;
-                            let r = 0.5 * p.volume[q].sqrt();
+                            let r = crate::math::half_size(p.volume[q]);
                             plane.wall.touches(p.position[q], r, p.velocity[q], dt)
                         });
             }
@@ -195,7 +195,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     sc.held.push((b.node, n));
                     let pressed = planes.iter().filter(|p| trial.dot(p.normal()) < 0.0).count();
                     if out.velocity == Vector::ZERO && pressed >= 2 {
-                        sc.held.push((b.node, n.perp()));
+                        for t in crate::math::tangents(n) {
+                            sc.held.push((b.node, t));
+                        }
                     }
                 }
             }

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::config::{Boundaries, Contact};
 use crate::error::SolverError;
-use crate::math::Vector;
+use crate::math::{DIM, Vector};
 use crate::par::{chunk_len, counting_sort};
 use crate::scratch::{BoundaryNode, Mirror, NodePlane, Scratch};
 use crate::solver::Solver;
@@ -143,7 +143,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             for (image, &node) in active.nodes().iter().enumerate() {
                 let i = node.i.rem_euclid(columns);
                 if i != node.i {
-                    if let Some(partner) = active.index_of(NodeId::new(i, node.j)) {
+                    let mut partner = node.axes();
+                    partner[0] = i;
+                    if let Some(partner) = active.index_of(NodeId::from_axes(partner)) {
                         sc.periodic_pairs.push((image as u32, partner as u32));
                     }
                 }
@@ -211,6 +213,10 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
             (sides.ground, normals.ground_kink),
             (sides.left_wall, normals.left_wall),
             (sides.right_wall, normals.right_wall),
+            #[cfg(feature = "dim3")]
+            (sides.back_wall, normals.back_wall),
+            #[cfg(feature = "dim3")]
+            (sides.front_wall, normals.front_wall),
         ] {
             if let (Some(law), Some(normal)) = (law, normal) {
                 // The grid hands out unit normals and the friction law was validated with the
@@ -274,21 +280,24 @@ fn wall_reach<S: ShapeFunctions<N>, const N: usize>(
     let mut diagonal: f64 = 0.0;
     for &node in active.nodes() {
         for dj in [-1, 1] {
-            let corner = NodeId::new(node.i + 1, node.j + dj);
+            #[cfg(not(feature = "dim3"))]
+            let corner = node.offset([1, dj]);
+            #[cfg(feature = "dim3")]
+            let corner = node.offset([1, dj, 1]);
             if active.index_of(corner).is_some() {
                 let d = shape.node_position(corner) - shape.node_position(node);
                 diagonal = diagonal.max(d.length());
             }
         }
     }
-    let half_size = volume.par_iter().map(|&v| 0.5 * v.sqrt()).reduce(|| 0.0, f64::max);
+    let half_size = volume.par_iter().map(|&v| crate::math::half_size(v)).reduce(|| 0.0, f64::max);
     let side = mpm_grid::stencil_side(n) as f64;
     (0.5 * side + 1.0) * diagonal + half_size
 }
 
 /// For the block scatter (`p2g.rs`): each active node's block rank and place in its block's patch,
-/// and each block's neighbours below-left, below and left (`u32::MAX` where inactive); the patches
-/// sized to the blocks.
+/// and each block's neighbours below-left, below and left (in 3D the seven at offsets in
+/// {−1, 0}³; `u32::MAX` where inactive); the patches sized to the blocks.
 fn index_blocks<F, const N: usize>(sc: &mut Scratch<F, N>) {
     let side = patch_side(N);
     let active = &sc.active;
@@ -299,16 +308,20 @@ fn index_blocks<F, const N: usize>(sc: &mut Scratch<F, N>) {
         let o = active.block_origin(b);
         for node in &active.nodes()[range] {
             sc.node_block.push(b as u32);
-            // ci + side·cj < MAX_PATCH ≤ 121 (`p2g.rs`): fits a byte.
-            sc.node_local.push(((node.i - o.i) as usize + side * (node.j - o.j) as usize) as u8);
+            // ci + side·cj (+ side²·ck) < MAX_PATCH ≤ 216 (`p2g.rs`): fits a byte.
+            let (local, o) = (node.axes(), o.axes());
+            let place = (0..DIM).rev().fold(0, |p, a| p * side + (local[a] - o[a]) as usize);
+            sc.node_local.push(place as u8);
         }
-        let rank = |di: i32, dj: i32| {
-            let n = NodeId::new(o.i + di * BLOCK_SIDE, o.j + dj * BLOCK_SIDE);
+        // neighbour m sits at offset ((m >> a) & 1) − 1 along axis a: below-left, below, left
+        // in the plane; the own block (all offsets 0) is not listed.
+        let rank = |m: usize| {
+            let n = o.offset(std::array::from_fn(|a| (((m >> a) & 1) as i32 - 1) * BLOCK_SIDE));
             active.block_rank(n).map_or(u32::MAX, |r| r as u32)
         };
-        sc.neighbours.push([rank(-1, -1), rank(0, -1), rank(-1, 0)]);
+        sc.neighbours.push(std::array::from_fn(rank));
     }
-    let cells = active.block_count() * side * side;
+    let cells = active.block_count() * side.pow(DIM as u32);
     sc.patch_mass.resize(cells, 0.0);
     sc.patch_momentum.resize(cells, Vector::ZERO);
     sc.patch_force.resize(cells, Vector::ZERO);

@@ -63,6 +63,9 @@
 //! looked up once per active set. Every sum runs in a fixed order in fixed chunks, so results are
 //! bit-identical for any thread count.
 
+// the 3D build keeps only the stubs at the end
+#![cfg_attr(feature = "dim3", allow(unused_imports, dead_code))]
+
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::Friction;
 use mpm_grid::{NodeId, ShapeFunctions, stencil_side};
@@ -96,12 +99,14 @@ pub const MAX_ITERATIONS: usize = 300;
 
 /// the band place of the entry (row node at stencil slot k, column node at slot l), w the
 /// stencil side: offsets −(w − 1)…w − 1 along each axis, x fastest.
+#[cfg(not(feature = "dim3"))]
 const fn band_place(k: usize, l: usize, w: usize) -> usize {
     let wide = 2 * w - 1;
     (l % w + w - 1 - k % w) + wide * (l / w + w - 1 - k / w)
 }
 
 /// Σ over fixed chunks of `f(chunk range)`, in chunk order: bit-identical for any thread count.
+#[cfg(not(feature = "dim3"))]
 fn chunked_sum(n: usize, f: impl Fn(std::ops::Range<usize>) -> Vector + Sync) -> Vector {
     let chunk = chunk_len(n);
     let parts: Vec<Vector> = (0..n.div_ceil(chunk))
@@ -112,12 +117,14 @@ fn chunked_sum(n: usize, f: impl Fn(std::ops::Range<usize>) -> Vector + Sync) ->
 }
 
 /// (M v)_i for the banded matrix `values` (rows of `band` entries, columns `neighbours`).
+#[cfg(not(feature = "dim3"))]
 fn row_times(values: &[Real], neighbours: &[u32], band: usize, i: usize, v: &[Vector]) -> Vector {
     let row = &values[i * band..][..band];
     let cols = &neighbours[i * band..][..band];
     row.iter().zip(cols).fold(Vector::ZERO, |s, (&a, &j)| s + a * v[j as usize])
 }
 
+#[cfg(not(feature = "dim3"))]
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// assembles M (module docs) from the step's stencils and nodal masses; nothing under the
     /// lumped matrix. Call after the particle-to-grid mass.
@@ -482,6 +489,32 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         cm.iterations += iterations as u64;
         Ok(())
     }
+}
+
+/// The 3D build has the lumped matrix only: the solver's settings refuse the consistent one
+/// (`SolverConfig::validate`), so these steps of the module docs have nothing to do.
+#[cfg(feature = "dim3")]
+impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
+    /// nothing: no consistent matrix in 3D.
+    pub(crate) fn assemble_mass_matrix(&mut self) {}
+
+    /// nothing: no consistent matrix in 3D.
+    pub(crate) fn project_velocity(&mut self, _which: Solve) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    /// nothing: no consistent matrix in 3D.
+    pub(crate) fn solve_acceleration(&mut self) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    /// nothing: no consistent matrix in 3D.
+    pub(crate) fn resolve_constrained(&mut self) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    /// nothing: no consistent matrix in 3D.
+    pub(crate) fn book_reactions(&mut self, _dt: Real) {}
 }
 
 #[cfg(test)]

@@ -16,8 +16,8 @@
 //! particle is read once per pass (the node-list gather this replaced read it once per node)
 //! and the partial sums stay in a few kilobytes of cache.
 
-use mpm_constitutive::{ConstitutiveModel, PlaneTensor};
-use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_side};
+use mpm_constitutive::ConstitutiveModel;
+use mpm_grid::{BLOCK_SIDE, ShapeFunctions, slot_offset, stencil_side};
 use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use crate::config::Transfer;
 use crate::consistent::Solve;
 use crate::error::SolverError;
-use crate::math::{Real, Vector};
+use crate::math::{DIM, Real, Stress, Vector};
 use crate::scratch::Scratch;
 use crate::solver::Solver;
 
@@ -36,7 +36,11 @@ pub(crate) const fn patch_side(n: usize) -> usize {
 }
 
 /// the most nodes a patch can have (stencils up to 4 × 4): places in a patch fit a byte.
+#[cfg(not(feature = "dim3"))]
 const MAX_PATCH: usize = (BLOCK_SIDE as usize + 3) * (BLOCK_SIDE as usize + 3);
+/// the most nodes a patch can have in 3D (stencils up to 3 × 3 × 3): places fit a byte.
+#[cfg(feature = "dim3")]
+const MAX_PATCH: usize = (BLOCK_SIDE as usize + 2).pow(3);
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
     /// nodal mass (eq 1) and velocity q_i / m_i into `scratch.mass` and `scratch.velocity`.
@@ -83,6 +87,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// −f_i^int = −Σ_p V_p σ_p · G_ip alone (no gravity) into `scratch.force`: the implicit
     /// initial state's internal force (`geostatic.rs`), summed as every step sums it.
+    #[cfg_attr(feature = "dim3", allow(dead_code))] // used by the implicit initial state
     pub(crate) fn p2g_internal_force(&mut self) {
         self.scatter::<false, false, true, false>(0.0, Vector::ZERO);
     }
@@ -97,12 +102,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         dt_back: Real,
         g: Vector,
     ) {
-        const { assert!(patch_side(N) * patch_side(N) <= MAX_PATCH) };
+        const { assert!(patch_side(N).pow(DIM as u32) <= MAX_PATCH) };
         let side = patch_side(N);
-        let cells = side * side;
+        let cells = side.pow(DIM as u32);
         let w = stencil_side(N);
-        // slot k of a stencil lies k mod w, k div w nodes from its first node
-        let offset: [usize; N] = std::array::from_fn(|k| k % w + side * (k / w));
+        // slot k of a stencil lies k mod w, k div w (, k div w²) nodes from its first node
+        let offset: [usize; N] = std::array::from_fn(|k| {
+            let d = slot_offset(k, w);
+            (0..DIM).rev().fold(0, |p, a| p * side + d[a] as usize)
+        });
         let shape = &self.shape;
         let p = &self.particles;
         let (mass, velocity, volume, stress) =
@@ -147,8 +155,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 if APIC {
                     let o = active.block_origin(b);
                     for (c, x) in place[..cells].iter_mut().enumerate() {
-                        let node = NodeId::new(o.i + (c % side) as i32, o.j + (c / side) as i32);
-                        *x = shape.node_position(node);
+                        let d = std::array::from_fn(|a| ((c / side.pow(a as u32)) % side) as i32);
+                        *x = shape.node_position(o.offset(d));
                     }
                 }
                 let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
@@ -191,8 +199,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .for_each(|(i, (m, (v, f)))| {
                 let b = node_block[i] as usize;
                 let c = usize::from(node_local[i]);
-                let (ci, cj) = (c % side, c / side);
-                let [below_left, below, left] = neighbours[b];
                 let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
                 let mut add = |src: u32, at: usize| {
                     if src != u32::MAX {
@@ -208,14 +214,40 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         }
                     }
                 };
-                if ci < edge && cj < edge {
-                    add(below_left, c + block + side * block);
+                #[cfg(not(feature = "dim3"))]
+                {
+                    let (ci, cj) = (c % side, c / side);
+                    let [below_left, below, left] = neighbours[b];
+                    if ci < edge && cj < edge {
+                        add(below_left, c + block + side * block);
+                    }
+                    if cj < edge {
+                        add(below, c + side * block);
+                    }
+                    if ci < edge {
+                        add(left, c + block);
+                    }
                 }
-                if cj < edge {
-                    add(below, c + side * block);
-                }
-                if ci < edge {
-                    add(left, c + block);
+                // neighbour m lies one block lower along the axes whose bit of m is 0
+                // (`locate.rs`), in the order m = 0, 1, …: the node is in its patch where it is
+                // within the w − 1 edge layers along each of those axes.
+                #[cfg(feature = "dim3")]
+                {
+                    let local = [c % side, (c / side) % side, c / (side * side)];
+                    let stride = [1, side, side * side];
+                    for (m, &src) in neighbours[b].iter().enumerate() {
+                        let mut at = c;
+                        let mut inside = true;
+                        for a in 0..DIM {
+                            if (m >> a) & 1 == 0 {
+                                inside &= local[a] < edge;
+                                at += block * stride[a];
+                            }
+                        }
+                        if inside {
+                            add(src, at);
+                        }
+                    }
                 }
                 add(b as u32, c);
                 if MASS {
@@ -266,8 +298,20 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
 /// σ·G in the plane of the analysis (plane strain: σ_zz does not act on an in-plane gradient).
 #[inline(always)]
-fn in_plane(s: &PlaneTensor, g: Vector) -> Vector {
+#[cfg(not(feature = "dim3"))]
+fn in_plane(s: &Stress, g: Vector) -> Vector {
     Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y)
+}
+
+/// σ·G: the stress applied to a shape-function gradient (in 3D the whole tensor).
+#[inline(always)]
+#[cfg(feature = "dim3")]
+fn in_plane(s: &Stress, g: Vector) -> Vector {
+    Vector::new(
+        s.xx * g.x + s.xy * g.y + s.zx * g.z,
+        s.xy * g.x + s.yy * g.y + s.yz * g.z,
+        s.zx * g.x + s.yz * g.y + s.zz * g.z,
+    )
 }
 
 #[cfg(test)]

@@ -10,13 +10,13 @@
 //! below `SolverConfig::separation_density` of its material's reference density by the
 //! increment is a separated grain: it skips the update and carries no stress.
 
-use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, PlaneTensor, UpdateReport};
+use mpm_constitutive::{ConstitutiveModel, MAX_BRANCHES, UpdateReport};
 use mpm_grid::{ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
 use crate::config::{Scheme, Transfer};
 use crate::error::SolverError;
-use crate::math::{Matrix, Real, Vector};
+use crate::math::{Matrix, Real, Stress, Vector, full_stress, outer};
 use crate::par::chunk_len;
 use crate::report::BranchCounts;
 use crate::scratch::Ahead;
@@ -114,7 +114,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         for k in 0..N {
                             let v = nodal[idx[j][k] as usize];
                             let g: Vector = grads[k];
-                            l += Matrix::from_cols(v * g.x, v * g.y);
+                            l += outer(v, g);
                         }
                         l
                     };
@@ -134,9 +134,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                             Err(_) => tally.outside = true,
                         }
                     }
+                    #[cfg(not(feature = "dim3"))]
                     let (lxx, lyx) = (l.x_axis.x, l.x_axis.y);
+                    #[cfg(not(feature = "dim3"))]
                     let (lxy, lyy) = (l.y_axis.x, l.y_axis.y);
-                    let d_eps = PlaneTensor::new(dt * lxx, dt * lyy, 0.0, 0.5 * dt * (lxy + lyx));
+                    #[cfg(not(feature = "dim3"))]
+                    let d_eps = Stress::new(dt * lxx, dt * lyy, 0.0, 0.5 * dt * (lxy + lyx));
+                    #[cfg(feature = "dim3")]
+                    let d_eps = Stress::from_mat3_sym(&(0.5 * dt * (l + l.transpose())));
                     let model = &materials[usize::from(material[q])];
                     let ratio = 1.0 + d_eps.trace();
                     if ratio.is_nan() || ratio <= 0.0 {
@@ -155,21 +160,32 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         && mass[q]
                             < separation * reference[usize::from(material[q])] * volume[j] * ratio;
                     let report = if separated {
-                        tally.dissipation +=
-                            volume[j] * model.stored_energy_density(&stress[j].to_sym(), &state[j]);
-                        stress[j] = PlaneTensor::default();
+                        tally.dissipation += volume[j]
+                            * model.stored_energy_density(&full_stress(&stress[j]), &state[j]);
+                        stress[j] = Stress::default();
                         UpdateReport::ELASTIC
                     } else {
-                        let theta = 0.5 * dt * (lyx - lxy);
-                        let rotation = (objective && theta != 0.0).then(|| cos_sin(theta));
-                        model
-                            .update_plane(&mut stress[j], &mut state[j], &d_eps, dt, rotation)
-                            .map_err(|source| SolverError::Constitutive {
-                                step,
-                                particle: q,
-                                position: position[q],
-                                source,
-                            })?
+                        #[cfg(not(feature = "dim3"))]
+                        let result = {
+                            let theta = 0.5 * dt * (lyx - lxy);
+                            let rotation = (objective && theta != 0.0).then(|| cos_sin(theta));
+                            model.update_plane(&mut stress[j], &mut state[j], &d_eps, dt, rotation)
+                        };
+                        #[cfg(feature = "dim3")]
+                        let result = update_in_space(
+                            model,
+                            &mut stress[j],
+                            &mut state[j],
+                            &d_eps,
+                            dt,
+                            objective.then_some(l),
+                        );
+                        result.map_err(|source| SolverError::Constitutive {
+                            step,
+                            particle: q,
+                            position: position[q],
+                            source,
+                        })?
                     };
                     if M::IS_PLASTIC {
                         // Dissipation per unit volume, over the volume at the start of the increment.
@@ -233,10 +249,40 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
+/// The 3D stress update: with `velocity_gradient` (an objective rate), σ and the state are first
+/// turned by the incremental rotation of the spin W = skew(L), R = (I − ½Δt W)⁻¹ (I + ½Δt W)
+/// (Hughes & Winget 1980: exactly orthogonal, second-order accurate in Δt W), then the model
+/// integrates `d_eps`. On failure σ and the state are left as they were.
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn update_in_space<M: ConstitutiveModel>(
+    model: &M,
+    sigma: &mut Stress,
+    state: &mut M::State,
+    d_eps: &Stress,
+    dt: Real,
+    velocity_gradient: Option<Matrix>,
+) -> Result<UpdateReport, mpm_constitutive::ConstitutiveError> {
+    let Some(l) = velocity_gradient else {
+        return model.update(sigma, state, d_eps, dt);
+    };
+    let half_spin = 0.25 * dt * (l - l.transpose());
+    if half_spin == Matrix::ZERO {
+        return model.update(sigma, state, d_eps, dt);
+    }
+    let r = (Matrix::IDENTITY - half_spin).inverse() * (Matrix::IDENTITY + half_spin);
+    let (mut s, mut st) = (sigma.rotated(&r), *state);
+    model.rotate_state(&mut st, &r);
+    let report = model.update(&mut s, &mut st, d_eps, dt)?;
+    (*sigma, *state) = (s, st);
+    Ok(report)
+}
+
 /// (cos θ, sin θ) of an incremental rotation angle. The angles of a step are small (Δt times a
 /// spin rate): below 2⁻⁵ the Taylor series to θ⁸ (cos) and θ⁷ (sin) leave a remainder below
 /// 2⁻⁵⁸ of the result, as accurate as the library's `sin_cos` (tested) at a fraction of its
 /// cost (6 % of the flume's run).
+#[cfg(not(feature = "dim3"))]
 #[inline(always)]
 fn cos_sin(theta: Real) -> (Real, Real) {
     if theta.abs() < 0.031_25 {

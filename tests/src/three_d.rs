@@ -1,0 +1,436 @@
+//! The 3D cases: the same solver source built for space (`mpm-solver3d` over `mpm-grid3d` and
+//! `mpm-contact3d`), checked against the rigid block's laws written for a vector and against
+//! conservation. y is up in both builds and z is the third axis, so a 2D case is the section
+//! z = const of its 3D sibling.
+//!
+//! - [`slope`]: a block sliding down a 30° plane whose fall line is oblique to the grid's axes
+//!   (the floor is the grid's y = 0 face and gravity is tilted, so the fall line runs 30° from
+//!   x towards z): eq 22 along the fall line, nothing across it.
+//! - [`thrown`]: the same block thrown across the slope, against the rigid block's ODE
+//!   (Coulomb friction opposing the sliding velocity in the plane), integrated here.
+//! - [`diagonal`]: eq 21 along the grid's diagonal (x = z) on the level: isotropy.
+//! - [`free_fall`]: momentum m g t to round-off.
+//! - [`collapse_bits`]: a Drucker-Prager column collapsing on a rough floor, its state's bits
+//!   for a given number of threads.
+
+use mpm_constitutive::{
+    ConeMatch, ConstitutiveError, ConstitutiveModel, DruckerPrager, DruckerPragerParams,
+    LinearElastic,
+};
+use mpm_contact3d::Friction;
+use mpm_grid3d::{RegularGrid, RegularShape, ShapeFunctions, ShapeJob, with_regular_shape};
+use mpm_solver3d::generate::{Shape, fill};
+use mpm_solver3d::{
+    Boundaries, NewParticle, Particles, STANDARD_GRAVITY, Scheme, Solver, SolverConfig,
+    SolverError, Stress, TimeStep, Transfer, Vector,
+};
+
+use crate::CaseError;
+use crate::abe2005::{E, MU, NU, RHO, V0};
+
+fn setup<E: std::fmt::Display>(e: E) -> CaseError {
+    CaseError::Setup(e.to_string())
+}
+
+impl From<mpm_solver3d::SolverError> for CaseError {
+    fn from(e: mpm_solver3d::SolverError) -> Self {
+        CaseError::Setup(format!("3D solver: {e}"))
+    }
+}
+
+/// The numerical choices of a 3D run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Numerics {
+    /// cube cells of this side (m)
+    pub cell: f64,
+    /// particles per cell along each axis (ppc³ per cell)
+    pub ppc: usize,
+    /// update scheme
+    pub scheme: Scheme,
+    /// FLIP or APIC
+    pub transfer: Transfer,
+    /// shape functions
+    pub shape: RegularShape,
+    /// Courant number
+    pub courant: f64,
+}
+
+impl Numerics {
+    /// the paper's choices at cell size `cell`: 2 × 2 × 2 particles per cell, USAVG, FLIP,
+    /// (tri)linear, C = 0.1.
+    pub fn paper(cell: f64) -> Self {
+        Self {
+            cell,
+            ppc: 2,
+            scheme: Scheme::Usavg,
+            transfer: Transfer::Flip,
+            shape: RegularShape::Bilinear,
+            courant: 0.1,
+        }
+    }
+
+    /// a short name for tables: "USAVG FLIP TRILINEAR".
+    pub fn name(&self) -> String {
+        let shape = match self.shape {
+            RegularShape::Bilinear => "trilinear",
+            other => other.name(),
+        };
+        format!("{:?} {:?} {shape}", self.scheme, self.transfer).to_uppercase()
+    }
+}
+
+/// Particles of one material filling `shape` at `ppc³` per cell of side `cell`.
+pub fn block<S: Copy>(
+    shape: &Shape,
+    cell: f64,
+    ppc: usize,
+    density: f64,
+    velocity: Vector,
+    state: S,
+) -> Particles<S> {
+    let seeds = fill(shape, cell / ppc as f64);
+    let mut p = Particles::with_capacity(seeds.len());
+    for s in seeds {
+        p.push(NewParticle {
+            position: s.position,
+            velocity,
+            volume: s.volume,
+            density,
+            stress: Stress::ZERO,
+            state,
+            material: 0,
+            body: 0,
+        });
+    }
+    p
+}
+
+/// Mass-weighted mean of a per-particle vector (centre of mass, mean velocity).
+pub fn mass_mean<S>(p: &Particles<S>, field: &[Vector]) -> Vector {
+    let m: f64 = p.mass.iter().sum();
+    p.mass.iter().zip(field).map(|(&mi, &f)| mi * f).sum::<Vector>() / m
+}
+
+/// A run: a solver built on the shape functions the job is given, stopped at each of `times`
+/// for `sample` to look at the particles.
+struct Run<'a, M: ConstitutiveModel> {
+    material: M,
+    particles: Particles<M::State>,
+    config: SolverConfig,
+    times: &'a [f64],
+    sample: &'a mut dyn FnMut(f64, &Particles<M::State>),
+}
+
+impl<M: ConstitutiveModel> ShapeJob for Run<'_, M> {
+    type Output = Result<u64, SolverError>;
+    fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> Self::Output {
+        let mut s = Solver::new(shape, vec![self.material], self.particles, self.config)?;
+        for &t in self.times {
+            s.run_until(t, &mut ())?;
+            (self.sample)(t, s.particles());
+        }
+        Ok(s.step_count())
+    }
+}
+
+/// runs `particles` of `material` on `grid` with the shape functions of `n`, sampling at `times`;
+/// the steps taken.
+fn run<M: ConstitutiveModel>(
+    grid: RegularGrid,
+    n: &Numerics,
+    material: M,
+    particles: Particles<M::State>,
+    config: SolverConfig,
+    times: &[f64],
+    sample: &mut dyn FnMut(f64, &Particles<M::State>),
+) -> Result<u64, CaseError> {
+    let job = Run { material, particles, config, times, sample };
+    Ok(with_regular_shape(n.shape, grid, n.ppc, job).map_err(setup)??)
+}
+
+/// the elastic block of the paper's cases (E = 1 MPa, ν = 0.3).
+fn elastic() -> Result<LinearElastic, CaseError> {
+    LinearElastic::from_young_poisson(E, NU).map_err(setup)
+}
+
+/// the settings of the sliding cases: the floor with Coulomb friction μ, gravity `gravity`.
+fn sliding_config(n: &Numerics, gravity: Vector, mu: f64) -> SolverConfig {
+    SolverConfig {
+        scheme: n.scheme,
+        transfer: n.transfer,
+        time_step: TimeStep::Courant(n.courant),
+        gravity,
+        boundaries: Boundaries { ground: Some(Friction::Coulomb { mu }), ..Default::default() },
+        ..Default::default()
+    }
+}
+
+/// The inclination of [`slope`] and [`thrown`] (deg) and the azimuth of their fall line, from x
+/// towards z (deg): oblique to every grid axis.
+pub const SLOPE_DEG: f64 = 30.0;
+/// the fall line's azimuth (deg).
+pub const AZIMUTH_DEG: f64 = 30.0;
+
+/// The slope's frame: gravity, the fall line (unit, in the floor) and the direction across it.
+pub fn slope_frame() -> (Vector, Vector, Vector) {
+    let (theta, alpha) = (SLOPE_DEG.to_radians(), AZIMUTH_DEG.to_radians());
+    let g = STANDARD_GRAVITY;
+    let gravity =
+        Vector::new(g * theta.sin() * alpha.cos(), -g * theta.cos(), g * theta.sin() * alpha.sin());
+    let down = Vector::new(alpha.cos(), 0.0, alpha.sin());
+    let across = Vector::new(-alpha.sin(), 0.0, alpha.cos());
+    (gravity, down, across)
+}
+
+/// What a sliding run measured: at each sample time, the centre of mass's travel along the fall
+/// line and across it (m), and the rigid block's (m, m).
+#[derive(Clone, Debug, Default)]
+pub struct Path {
+    /// (t, simulated (along, across), rigid block's (along, across)).
+    pub samples: Vec<(f64, [f64; 2], [f64; 2])>,
+    /// steps and particles.
+    pub steps: u64,
+    /// particles in the scene.
+    pub particles: usize,
+}
+
+impl Path {
+    /// the largest error of the travel (the length of the difference of the in-plane
+    /// displacements) relative to the rigid block's travel.
+    pub fn worst_relative(&self) -> f64 {
+        self.samples
+            .iter()
+            .map(|(_, s, r)| {
+                let d = glam::DVec2::from(*s) - glam::DVec2::from(*r);
+                d.length() / glam::DVec2::from(*r).length()
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// A 1 × 0.5 × 1 m elastic block on a 30° slope whose fall line runs 30° from x towards z
+/// (μ = 0.3), released at rest (`across_speed` = 0) or thrown across the fall line at
+/// `across_speed` m/s, sampled at `times`; the rigid block's path beside it.
+fn on_slope(n: &Numerics, across_speed: f64, times: &[f64]) -> Result<Path, CaseError> {
+    let (gravity, down, across) = slope_frame();
+    let grid =
+        RegularGrid::new(Vector::ZERO, Vector::splat(n.cell), cells([10.0, 1.5, 10.0], n.cell))
+            .map_err(setup)?;
+    let min = Vector::new(2.0, 0.0, 1.0);
+    let shape = Shape::Box { min, max: min + Vector::new(1.0, 0.5, 1.0) };
+    let particles = block(&shape, n.cell, n.ppc, RHO, across_speed * across, ());
+    let count = particles.len();
+    let c0 = mass_mean(&particles, &particles.position);
+    let config = sliding_config(n, gravity, MU);
+    let mut samples = Vec::new();
+    let mut sample = |t: f64, p: &Particles<()>| {
+        let d = mass_mean(p, &p.position) - c0;
+        let rigid = rigid_path(across_speed, t);
+        samples.push((t, [d.dot(down), d.dot(across)], rigid));
+    };
+    let steps = run(grid, n, elastic()?, particles, config, times, &mut sample)?;
+    Ok(Path { samples, steps, particles: count })
+}
+
+/// the cells of a grid of `size` m along each axis at cell size `cell`.
+fn cells(size: [f64; 3], cell: f64) -> [usize; 3] {
+    size.map(|s| (s / cell).round().max(1.0) as usize)
+}
+
+/// eq 22 along the slope's fall line: released at rest, the block slides from t = 0 at
+/// g (sin θ − μ cos θ) and (on the fall line) never sideways; [`slope`] measures that at 1 s
+/// and 2 s.
+pub fn slope(n: &Numerics) -> Result<Path, CaseError> {
+    on_slope(n, 0.0, &[1.0, 2.0])
+}
+
+/// The speed [`thrown`] throws the block across the fall line with (m/s).
+pub const THROW_SPEED: f64 = 2.0;
+
+/// the block thrown across the slope at [`THROW_SPEED`], sampled at 1 s and 2 s against the
+/// rigid block's ODE.
+pub fn thrown(n: &Numerics) -> Result<Path, CaseError> {
+    on_slope(n, THROW_SPEED, &[1.0, 2.0])
+}
+
+/// The rigid block on the slope, in the slope's plane: (along, across) travel at `t` of a block
+/// starting with speed `across_speed` across the fall line, under the in-plane gravity
+/// g sin θ along the fall line and Coulomb friction μ g cos θ opposing its sliding velocity.
+/// Integrated by the classical Runge-Kutta method, the step halved until two answers agree
+/// to 1e-12 m (the block never stops: tan θ > μ).
+pub fn rigid_path(across_speed: f64, t: f64) -> [f64; 2] {
+    let theta = SLOPE_DEG.to_radians();
+    let (gt, gn) = (STANDARD_GRAVITY * theta.sin(), STANDARD_GRAVITY * theta.cos());
+    let pull = glam::DVec2::new(gt, 0.0);
+    let accel = |v: glam::DVec2| {
+        // at rest the block starts along the pull (g sin θ > μ g cos θ), friction against it
+        let speed = v.length();
+        let direction = if speed > 0.0 { v / speed } else { pull.normalize() };
+        pull - MU * gn * direction
+    };
+    let integrate = |steps: usize| {
+        let h = t / steps as f64;
+        let (mut x, mut v) = (glam::DVec2::ZERO, glam::DVec2::new(0.0, across_speed));
+        for _ in 0..steps {
+            // (x, v)' = (v, a(v))
+            let (k1x, k1v) = (v, accel(v));
+            let (k2x, k2v) = (v + 0.5 * h * k1v, accel(v + 0.5 * h * k1v));
+            let (k3x, k3v) = (v + 0.5 * h * k2v, accel(v + 0.5 * h * k2v));
+            let (k4x, k4v) = (v + h * k3v, accel(v + h * k3v));
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        }
+        x
+    };
+    if t <= 0.0 {
+        return [0.0, 0.0];
+    }
+    let mut steps = 64;
+    let mut last = integrate(steps);
+    loop {
+        steps *= 2;
+        let next = integrate(steps);
+        if (next - last).length() < 1e-12 || steps > 1 << 22 {
+            return next.to_array();
+        }
+        last = next;
+    }
+}
+
+/// What the diagonal case measured.
+#[derive(Clone, Debug, Default)]
+pub struct Diagonal {
+    /// the centre of mass's travel along the diagonal at the end (m)
+    pub travel: f64,
+    /// eq 21's v0²/(2 μ g) (m)
+    pub expected: f64,
+    /// its travel across the diagonal (m)
+    pub across: f64,
+    /// steps
+    pub steps: u64,
+    /// particles
+    pub particles: usize,
+}
+
+/// eq 21 along the grid's diagonal: a 1 m elastic cube sliding at 10 m/s along x = z on a level
+/// floor with μ = 0.3 stops after v0²/(2 μ g) = 16.99 m, as it does along x (isotropy of the
+/// tangential law and of the grid). Run to 4 s, past the rigid stop at 3.40 s.
+pub fn diagonal(n: &Numerics) -> Result<Diagonal, CaseError> {
+    let grid =
+        RegularGrid::new(Vector::ZERO, Vector::splat(n.cell), cells([15.0, 2.0, 15.0], n.cell))
+            .map_err(setup)?;
+    let dir = Vector::new(1.0, 0.0, 1.0).normalize();
+    let across = Vector::new(-1.0, 0.0, 1.0).normalize();
+    let min = Vector::new(0.5, 0.0, 0.5);
+    let shape = Shape::Box { min, max: min + Vector::ONE };
+    let particles = block(&shape, n.cell, n.ppc, RHO, V0 * dir, ());
+    let count = particles.len();
+    let c0 = mass_mean(&particles, &particles.position);
+    let config = sliding_config(n, Vector::NEG_Y * STANDARD_GRAVITY, MU);
+    let mut end = Vector::ZERO;
+    let mut sample = |_t: f64, p: &Particles<()>| end = mass_mean(p, &p.position) - c0;
+    let steps = run(grid, n, elastic()?, particles, config, &[4.0], &mut sample)?;
+    Ok(Diagonal {
+        travel: end.dot(dir),
+        expected: crate::abe2005::eq21_distance(),
+        across: end.dot(across),
+        steps,
+        particles: count,
+    })
+}
+
+/// What the free-fall case measured.
+#[derive(Clone, Debug, Default)]
+pub struct FreeFall {
+    /// |P − m g t| / |m g t| at the end, P the particles' momentum
+    pub momentum_error: f64,
+    /// steps
+    pub steps: u64,
+}
+
+/// A 1 m elastic cube falling freely for 0.3 s (no boundary reached): the momentum is m g t.
+pub fn free_fall(n: &Numerics) -> Result<FreeFall, CaseError> {
+    let grid =
+        RegularGrid::new(Vector::ZERO, Vector::splat(n.cell), cells([3.0, 3.0, 3.0], n.cell))
+            .map_err(setup)?;
+    let min = Vector::new(1.0, 1.5, 1.0);
+    let particles =
+        block(&Shape::Box { min, max: min + Vector::ONE }, n.cell, n.ppc, RHO, Vector::ZERO, ());
+    let config = SolverConfig {
+        scheme: n.scheme,
+        transfer: n.transfer,
+        time_step: TimeStep::Courant(n.courant),
+        ..Default::default()
+    };
+    let t = 0.3;
+    let mut error = f64::NAN;
+    let mut sample = |t: f64, p: &Particles<()>| {
+        let expected = Vector::NEG_Y * STANDARD_GRAVITY * p.total_mass() * t;
+        error = (p.momentum() - expected).length() / expected.length();
+    };
+    let steps = run(grid, n, elastic()?, particles, config, &[t], &mut sample)?;
+    Ok(FreeFall { momentum_error: error, steps })
+}
+
+/// the Drucker-Prager sand of the 3D column (E = 2 MPa, ν = 0.3, c = 10 Pa, φ = 35°, ψ = 0,
+/// the cone through the triaxial-compression corners).
+pub fn sand() -> Result<DruckerPrager, ConstitutiveError> {
+    DruckerPrager::new(DruckerPragerParams {
+        young: 2.0e6,
+        poisson: 0.3,
+        cohesion: 10.0,
+        friction_angle_deg: 35.0,
+        dilatancy_angle_deg: 0.0,
+        hardening_modulus: 0.0,
+        mixing: 1.0,
+        cone_match: ConeMatch::Outer,
+    })
+}
+
+/// The bits of a collapsing sand column's state after `steps` steps: a 1.2 × 1 × 1.2 m column
+/// of Drucker-Prager sand at 0.1 m cells, 2³ particles per cell (11 520 particles, many
+/// chunks and node blocks), quadratic B-splines and APIC, on a floor with μ = 0.5 between
+/// frictionless walls, run on the current rayon pool. Bit-identical results for any thread
+/// count are what is asserted of it.
+pub fn collapse_bits(steps: u64) -> Result<(usize, Vec<u64>), CaseError> {
+    let n = Numerics {
+        cell: 0.1,
+        ppc: 2,
+        scheme: Scheme::Musl,
+        transfer: Transfer::Apic,
+        shape: RegularShape::BSpline,
+        courant: 0.3,
+    };
+    let grid =
+        RegularGrid::new(Vector::ZERO, Vector::splat(n.cell), cells([3.0, 1.5, 3.0], n.cell))
+            .map_err(setup)?;
+    let min = Vector::new(0.9, 0.0, 0.9);
+    let shape = Shape::Box { min, max: min + Vector::new(1.2, 1.0, 1.2) };
+    let material = sand().map_err(setup)?;
+    let particles = block(&shape, n.cell, n.ppc, 1600.0, Vector::ZERO, material.initial_state());
+    let count = particles.len();
+    let free = Friction::Coulomb { mu: 0.0 };
+    let config = SolverConfig {
+        scheme: n.scheme,
+        transfer: n.transfer,
+        time_step: TimeStep::Courant(n.courant),
+        boundaries: Boundaries {
+            ground: Some(Friction::Coulomb { mu: 0.5 }),
+            ..Boundaries::all(free)
+        },
+        ..Default::default()
+    };
+    let mut solver =
+        Solver::new(mpm_grid3d::QuadraticBSpline::new(grid), vec![material], particles, config)?;
+    for _ in 0..steps {
+        solver.step()?;
+    }
+    let p = solver.particles();
+    let mut bits = Vec::with_capacity(p.len() * 12);
+    for i in 0..p.len() {
+        bits.extend(p.position[i].to_array().map(f64::to_bits));
+        bits.extend(p.velocity[i].to_array().map(f64::to_bits));
+        bits.extend(p.stress[i].to_array().map(f64::to_bits));
+    }
+    Ok((count, bits))
+}
