@@ -7,6 +7,7 @@
 
 mod mixed;
 mod open_core;
+mod three_d;
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -487,6 +488,7 @@ pub fn run(quick: bool) -> Result<bool> {
     manufactured_rows(&mut rows);
     geostatic_rows(&mut rows);
     mixed::rows(&mut rows);
+    three_d::rows(&mut rows, quick);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
     let exact = (0..=1000)
         .map(|k| k as f64 * 0.05)

@@ -16,8 +16,8 @@ mod progress;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mpm_run::{
-    DEFAULT_SCENE, ElementTest, ElementTestOptions, OutputError, RunError, RunOptions, RunStatus,
-    RunSummary, SCENES, Scene, SceneError,
+    AnyScene, DEFAULT_SCENE, ElementTest, ElementTestOptions, OutputError, RunError, RunOptions,
+    RunStatus, RunSummary, SCENES, Scene, SceneError, SpaceScene,
 };
 
 #[derive(Parser)]
@@ -171,8 +171,9 @@ fn main() -> ExitCode {
         Command::Run { scene, out, threads, quiet, force } => {
             let signals = signals();
             let name = scene.unwrap_or_else(|| DEFAULT_SCENE.to_string());
-            let scene = match load(&name) {
-                Ok(s) => s,
+            let scene = match load_any(&name) {
+                Ok(AnyScene::Plane(s)) => s,
+                Ok(AnyScene::Space(s)) => return run_space(&s, &name, out, threads, quiet, force),
                 Err(e) => return scene_failure(&e),
             };
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(stem(&name)));
@@ -306,10 +307,79 @@ fn scene_materials(
         .collect()
 }
 
+/// `mpm run` of a 3D scene.
+fn run_space(
+    scene: &SpaceScene,
+    name: &str,
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+    quiet: bool,
+    force: bool,
+) -> ExitCode {
+    let signals = signals();
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(stem(name)));
+    let opts = RunOptions {
+        out_dir: Some(out.clone()),
+        threads,
+        progress: progress::Terminal::sink(quiet),
+        force,
+        stop_after: None,
+        interrupt: Some(signals.interrupt.clone()),
+    };
+    if !quiet {
+        eprintln!(
+            "mpm: running {} (3D, {} particles, end time {} s) into {}",
+            scene.origin(),
+            scene.particle_count(),
+            scene.end_time,
+            out.display()
+        );
+    }
+    finish(mpm_run::run_space_scene(scene, &opts), &out, quiet, &signals)
+}
+
+/// `mpm check` of a 3D scene.
+fn check_space(scene: &SpaceScene) -> ExitCode {
+    match mpm_run::check_space_scene(scene) {
+        Ok(r) => {
+            let c = &scene.config;
+            println!("{}: valid (3D)", scene.origin());
+            println!("  particles:        {}", r.particles);
+            let cells: Vec<String> = r.cells.iter().map(ToString::to_string).collect();
+            println!(
+                "  grid:             {} cells, {} active nodes at t = 0",
+                cells.join(" × "),
+                r.active_nodes
+            );
+            println!(
+                "  scheme:           {}, {} shape functions, {:?} transfer, time step {:?}",
+                c.scheme.name(),
+                scene.shape_function.name(),
+                c.transfer,
+                c.time_step
+            );
+            println!("  initial Δt:       {:.4e} s", r.initial_dt);
+            println!(
+                "  steps:            {} or more to t = {} s",
+                r.estimated_steps, scene.end_time
+            );
+            println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
+            println!(
+                "  frames:           {} (about {:.1} MB on disk)",
+                r.frames,
+                r.frame_bytes as f64 / 1e6
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => run_failure(&e),
+    }
+}
+
 /// `mpm check SCENE`: validates and prints what a run would do.
 fn check(scene: &str) -> ExitCode {
-    let scene = match load(scene) {
-        Ok(s) => s,
+    let scene = match load_any(scene) {
+        Ok(AnyScene::Plane(s)) => s,
+        Ok(AnyScene::Space(s)) => return check_space(&s),
         Err(e) => return scene_failure(&e),
     };
     match mpm_run::check_scene(&scene) {
@@ -444,6 +514,18 @@ fn section(
     ExitCode::SUCCESS
 }
 
+/// A scene file path (2D or 3D), or an embedded scene's name when no such file exists.
+fn load_any(name: &str) -> Result<AnyScene, Box<SceneError>> {
+    let path = Path::new(name);
+    if !path.is_file() {
+        if let Some(text) = mpm_run::embedded_scene(name) {
+            let scene = mpm_run::load_scene_str(text, &format!("embedded:{name}"));
+            return scene.map(|s| AnyScene::Plane(Box::new(s))).map_err(Box::new);
+        }
+    }
+    mpm_run::load_any_scene_file(path).map_err(Box::new)
+}
+
 /// A scene file path, or an embedded scene's name when no such file exists.
 fn load(name: &str) -> Result<Scene, Box<SceneError>> {
     let path = Path::new(name);
@@ -520,9 +602,12 @@ fn print_summary(s: &RunSummary, out: &Path) {
         s.particle_steps_per_s,
         s.threads
     );
+    // (3D: the front and tail are stations along the runout direction, energies in J)
+    let (front, tail, joule) =
+        if s.dimension == 3 { ("front", "tail", "J") } else { ("front x", "tail x", "J/m") };
     eprintln!(
-        "mpm: front x = {:.3} m (travel {:.3} m), tail x = {:.3} m, max thickness {:.3} m, \
-         centre of mass travel {:.3} m; energy residual {:.3e} J/m ({:+.2} % of the energy \
+        "mpm: {front} = {:.3} m (travel {:.3} m), {tail} = {:.3} m, max thickness {:.3} m, \
+         centre of mass travel {:.3} m; energy residual {:.3e} {joule} ({:+.2} % of the energy \
          scale, worst {:+.2} %)",
         s.runout.last.front_x,
         s.runout.last.front_travel,
@@ -575,7 +660,13 @@ fn finish(
             if !quiet {
                 print_summary(&s, out);
             }
-            if s.status == RunStatus::Interrupted {
+            if s.status == RunStatus::Interrupted && s.error.is_some() {
+                // (a 3D run: no checkpoint to resume from, the message says so)
+                eprintln!("mpm: {}", s.error.as_deref().unwrap_or_default());
+                if signals.terminated.load(Ordering::SeqCst) {
+                    return ExitCode::from(143);
+                }
+            } else if s.status == RunStatus::Interrupted {
                 eprintln!(
                     "mpm: interrupted at t = {} s; continue with `mpm resume {}`",
                     s.simulated_time,

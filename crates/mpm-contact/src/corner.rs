@@ -11,6 +11,10 @@
 //!    by slice order), and accept the first whose end velocity is admissible for every boundary.
 //! 3. If no boundary is pressed the node is untouched; if some are but no candidate is admissible, the
 //!    node is pinned in the corner and stops (status `Sticking`, all removed energy is normal work).
+//!    In 3D (`mpm-contact3d`) two planes meet along a line, not at a point: before pinning, the
+//!    edges of two pressed boundaries are tried (pairs in slice order), the node sliding along
+//!    the line with both normal velocities removed and the friction of both impulses; only a
+//!    node no edge admits (a vertex of three planes) is pinned.
 //!
 //! Why this order: for frictionless boundaries it returns exactly the Euclidean projection of v\* onto
 //! the admissible cone {v : v·n_k ≥ 0 ∀k}, i.e. the impulse solution of the two-sided contact problem.
@@ -41,8 +45,102 @@ enum Verdict {
     Free,
     /// the node ends on this boundary's candidate.
     On(Face),
+    /// (3D) the node ends on the edge where two boundaries meet.
+    #[cfg(feature = "dim3")]
+    Edge(Edge),
     /// the node is pinned in a corner.
     Stop,
+}
+
+/// (3D) A node held by two boundaries at once slides along their line of intersection e = n_i ×
+/// n_j (the plane has a line where, in 2D, two lines leave only their point): both normal
+/// velocities are removed by impulses λ_i n_i + λ_j n_j (per unit mass, both ≥ 0: each plane
+/// pushes), and the velocity along e is reduced by the friction both impulses carry,
+/// μ_i λ_i + μ_j λ_j, or stops where that is enough (eqs 15–16 at an edge).
+#[cfg(feature = "dim3")]
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    /// v^L.
+    end: Vector,
+    /// v\*·e.
+    along_trial: f64,
+    /// |v^L·e|.
+    along_end: f64,
+    /// the friction held it.
+    stuck: bool,
+}
+
+#[cfg(feature = "dim3")]
+impl Edge {
+    /// the edge of boundaries `a` and `b` under `law` for trial velocity `trial`, if both press
+    /// (λ ≥ 0) and the planes are not parallel.
+    fn resolve(a: &Boundary, b: &Boundary, trial: Vector, law: Law) -> Option<Self> {
+        let (na, nb) = (a.normal(), b.normal());
+        let e = na.cross(nb);
+        let length = e.length();
+        if !(length > 1e-9) {
+            return None;
+        }
+        let e = e / length;
+        let c = na.dot(nb);
+        let det = 1.0 - c * c;
+        let (ta, tb) = (trial.dot(na), trial.dot(nb));
+        let la = (-ta + c * tb) / det;
+        let lb = (-tb + c * ta) / det;
+        if !(la >= 0.0 && lb >= 0.0) {
+            return None;
+        }
+        let mu = |boundary: &Boundary| match (boundary.friction(), law) {
+            (Friction::Coulomb { mu }, Law::Step) => mu,
+            (Friction::Coulomb { .. }, Law::VelocityOnly) => 0.0,
+            (Friction::Rough | Friction::Fixed, _) => f64::INFINITY,
+        };
+        // (∞·0 avoided: an infinite coefficient with no impulse adds nothing)
+        let share = |m: f64, l: f64| if l > 0.0 { m * l } else { 0.0 };
+        let capacity = share(mu(a), la) + share(mu(b), lb);
+        let along_trial = trial.dot(e);
+        let stuck = along_trial.abs() <= capacity;
+        let along_end = if stuck { 0.0 } else { along_trial.abs() - capacity };
+        let end = along_trial.signum() * along_end * e;
+        Some(Self { end, along_trial, along_end, stuck })
+    }
+
+    /// the outcome for a node of mass `mass` with start-of-step velocity `v` and trial
+    /// acceleration `a`: the work split as at one boundary (normal: what the impulses normal to
+    /// the edge took; friction: what its friction took).
+    fn outcome(&self, mass: f64, v: Vector, a: Vector, dt: f64) -> ContactOutcome {
+        let trial = v + a * dt;
+        ContactOutcome {
+            acceleration: (self.end - v) / dt,
+            velocity: self.end,
+            status: if self.stuck {
+                crate::ContactStatus::Sticking
+            } else {
+                crate::ContactStatus::Sliding
+            },
+            friction_work: 0.5
+                * mass
+                * (self.along_trial * self.along_trial - self.along_end * self.along_end),
+            normal_work: 0.5
+                * mass
+                * (trial.length_squared() - self.along_trial * self.along_trial).max(0.0),
+            impulse: mass * (self.end - trial),
+        }
+    }
+}
+
+/// (3D) the first admissible edge of two pressed boundaries, pairs in slice order.
+#[cfg(feature = "dim3")]
+fn edge(boundaries: &[Boundary], trial: Vector, law: Law, slack: f64) -> Option<Edge> {
+    for (i, a) in boundaries.iter().enumerate() {
+        for b in &boundaries[i + 1..] {
+            let Some(edge) = Edge::resolve(a, b, trial, law) else { continue };
+            if boundaries.iter().all(|k| edge.end.dot(k.normal()) >= -slack) {
+                return Some(edge);
+            }
+        }
+    }
+    None
 }
 
 /// the pressed boundary that comes after `last` in the order (v\*·n_k ascending, then k ascending).
@@ -86,7 +184,14 @@ fn resolve_all(boundaries: &[Boundary], trial: Vector, law: Law) -> Verdict {
             return Verdict::On(face);
         }
     }
-    if last.is_some() { Verdict::Stop } else { Verdict::Free }
+    if last.is_none() {
+        return Verdict::Free;
+    }
+    #[cfg(feature = "dim3")]
+    if let Some(edge) = edge(boundaries, trial, law, slack) {
+        return Verdict::Edge(edge);
+    }
+    Verdict::Stop
 }
 
 /// the step for a valid `dt` and a work mass ≥ 0.
@@ -100,6 +205,8 @@ fn step_all(
     match resolve_all(boundaries, velocity + acceleration * dt, Law::Step) {
         Verdict::Free => ContactOutcome::untouched(velocity, acceleration, dt),
         Verdict::On(face) => face.outcome(mass, velocity, acceleration, dt),
+        #[cfg(feature = "dim3")]
+        Verdict::Edge(edge) => edge.outcome(mass, velocity, acceleration, dt),
         Verdict::Stop => ContactOutcome::stopped(mass, velocity, acceleration, dt),
     }
 }
@@ -148,6 +255,8 @@ pub fn constrain_velocity_all(boundaries: &[Boundary], velocity: Vector) -> Vect
     match resolve_all(boundaries, velocity, Law::VelocityOnly) {
         Verdict::Free => velocity,
         Verdict::On(face) => face.end_velocity(),
+        #[cfg(feature = "dim3")]
+        Verdict::Edge(edge) => edge.end,
         Verdict::Stop => Vector::ZERO,
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Each particle is a vertex cell. Point data (selectable with `output.fields`): `stress` (full
 //! 3×3 Cauchy tensor, Pa, tension positive, σ_zz of plane strain included), `pressure` (mean
-//! stress tr σ/3, Pa), `velocity` and `displacement` (3 components, z = 0), `plastic_strain`
+//! stress tr σ/3, Pa), `velocity` and `displacement` (3 components, z = 0 in 2D), `plastic_strain`
 //! (ε̄ᵖ), `body` and `material` (indices), `density` (kg/m³). Full f64 precision in every
 //! format (`output.vtk_format`):
 //!
@@ -21,7 +21,7 @@ use std::io::Write as _;
 
 use flate2::Compression;
 use flate2::write::ZlibEncoder;
-use mpm_constitutive::PlaneTensor;
+use mpm_constitutive::SymTensor;
 use mpm_scene::SceneModel;
 use mpm_scene::file::{VtkField, VtkFormat};
 use mpm_solver::Particles;
@@ -172,7 +172,110 @@ fn ascii_array<T: Scalar>(
     out.push_str("        </DataArray>\n");
 }
 
-/// one frame of particles at time `time` (s).
+/// The per-particle values a frame writes, from the particles of either build of the solver
+/// (plane strain: z = 0 and the plane-strain σ_zz; 3D: everything as it is).
+pub trait FrameData: Sync {
+    /// number of particles.
+    fn len(&self) -> usize;
+    /// position (m).
+    fn position(&self, i: usize) -> [f64; 3];
+    /// velocity (m/s).
+    fn velocity(&self, i: usize) -> [f64; 3];
+    /// displacement from the initial position (m).
+    fn displacement(&self, i: usize) -> [f64; 3];
+    /// the full Cauchy stress (Pa, tension positive).
+    fn stress(&self, i: usize) -> SymTensor;
+    /// equivalent plastic strain ε̄ᵖ.
+    fn plastic_strain(&self, i: usize) -> f64;
+    /// body index.
+    fn body(&self, i: usize) -> u16;
+    /// material index.
+    fn material(&self, i: usize) -> u16;
+    /// density (kg/m³).
+    fn density(&self, i: usize) -> f64;
+}
+
+/// a scene model's equivalent plastic strain of particle state `state` of material `m`.
+fn plastic<M: SceneModel>(materials: &[M], m: u16, state: &M::State) -> f64 {
+    materials.get(usize::from(m)).map_or(0.0, |mat| mat.equivalent_plastic_strain(state))
+}
+
+/// The plane-strain solver's particles as frame data.
+struct Plane<'a, M: SceneModel> {
+    p: &'a Particles<M::State>,
+    materials: &'a [M],
+}
+
+impl<M: SceneModel> FrameData for Plane<'_, M> {
+    fn len(&self) -> usize {
+        self.p.len()
+    }
+    fn position(&self, i: usize) -> [f64; 3] {
+        let x = self.p.position[i];
+        [x.x, x.y, 0.0]
+    }
+    fn velocity(&self, i: usize) -> [f64; 3] {
+        let v = self.p.velocity[i];
+        [v.x, v.y, 0.0]
+    }
+    fn displacement(&self, i: usize) -> [f64; 3] {
+        let u = self.p.position[i] - self.p.initial_position[i];
+        [u.x, u.y, 0.0]
+    }
+    fn stress(&self, i: usize) -> SymTensor {
+        self.p.stress[i].to_sym()
+    }
+    fn plastic_strain(&self, i: usize) -> f64 {
+        plastic(self.materials, self.p.material[i], &self.p.state[i])
+    }
+    fn body(&self, i: usize) -> u16 {
+        self.p.body[i]
+    }
+    fn material(&self, i: usize) -> u16 {
+        self.p.material[i]
+    }
+    fn density(&self, i: usize) -> f64 {
+        self.p.density(i)
+    }
+}
+
+/// The 3D solver's particles as frame data.
+struct Space<'a, M: SceneModel> {
+    p: &'a mpm_solver3d::Particles<M::State>,
+    materials: &'a [M],
+}
+
+impl<M: SceneModel> FrameData for Space<'_, M> {
+    fn len(&self) -> usize {
+        self.p.len()
+    }
+    fn position(&self, i: usize) -> [f64; 3] {
+        self.p.position[i].to_array()
+    }
+    fn velocity(&self, i: usize) -> [f64; 3] {
+        self.p.velocity[i].to_array()
+    }
+    fn displacement(&self, i: usize) -> [f64; 3] {
+        (self.p.position[i] - self.p.initial_position[i]).to_array()
+    }
+    fn stress(&self, i: usize) -> SymTensor {
+        self.p.stress[i]
+    }
+    fn plastic_strain(&self, i: usize) -> f64 {
+        plastic(self.materials, self.p.material[i], &self.p.state[i])
+    }
+    fn body(&self, i: usize) -> u16 {
+        self.p.body[i]
+    }
+    fn material(&self, i: usize) -> u16 {
+        self.p.material[i]
+    }
+    fn density(&self, i: usize) -> f64 {
+        self.p.density(i)
+    }
+}
+
+/// one frame of (plane-strain) particles at time `time` (s).
 pub fn frame<M: SceneModel>(
     p: &Particles<M::State>,
     materials: &[M],
@@ -180,7 +283,28 @@ pub fn frame<M: SceneModel>(
     format: VtkFormat,
     time: f64,
 ) -> std::io::Result<Frame> {
-    let n = p.len();
+    frame_of(&Plane { p, materials }, fields, format, time)
+}
+
+/// one frame of the 3D solver's particles at time `time` (s).
+pub fn frame_3d<M: SceneModel>(
+    p: &mpm_solver3d::Particles<M::State>,
+    materials: &[M],
+    fields: &[VtkField],
+    format: VtkFormat,
+    time: f64,
+) -> std::io::Result<Frame> {
+    frame_of(&Space { p, materials }, fields, format, time)
+}
+
+/// one frame of the particles `d` at time `time` (s).
+pub fn frame_of<D: FrameData>(
+    d: &D,
+    fields: &[VtkField],
+    format: VtkFormat,
+    time: f64,
+) -> std::io::Result<Frame> {
+    let n = d.len();
     let binary = format != VtkFormat::Ascii;
     let mut a = Arrays {
         format,
@@ -218,45 +342,31 @@ pub fn frame<M: SceneModel>(
                 "stress",
                 9,
                 n,
-                p.stress
-                    .iter()
-                    .map(PlaneTensor::to_sym)
+                (0..n)
+                    .map(|i| d.stress(i))
                     .flat_map(|s| [s.xx, s.xy, s.zx, s.xy, s.yy, s.yz, s.zx, s.yz, s.zz]),
             )?,
             VtkField::Pressure => {
-                a.array("pressure", 1, n, p.stress.iter().map(|s| s.trace() / 3.0))?;
+                a.array("pressure", 1, n, (0..n).map(|i| d.stress(i).trace() / 3.0))?;
             }
             VtkField::Velocity => {
-                a.array("velocity", 3, n, p.velocity.iter().flat_map(|v| [v.x, v.y, 0.0]))?;
+                a.array("velocity", 3, n, (0..n).flat_map(|i| d.velocity(i)))?;
             }
-            VtkField::Displacement => a.array(
-                "displacement",
-                3,
-                n,
-                p.position.iter().zip(&p.initial_position).flat_map(|(x, x0)| {
-                    let u = *x - *x0;
-                    [u.x, u.y, 0.0]
-                }),
-            )?,
-            VtkField::PlasticStrain => a.array(
-                "plastic_strain",
-                1,
-                n,
-                p.state.iter().zip(&p.material).map(|(st, &m)| {
-                    materials
-                        .get(usize::from(m))
-                        .map_or(0.0, |mat| mat.equivalent_plastic_strain(st))
-                }),
-            )?,
-            VtkField::Body => a.array("body", 1, n, p.body.iter().map(|&b| i32::from(b)))?,
+            VtkField::Displacement => {
+                a.array("displacement", 3, n, (0..n).flat_map(|i| d.displacement(i)))?;
+            }
+            VtkField::PlasticStrain => {
+                a.array("plastic_strain", 1, n, (0..n).map(|i| d.plastic_strain(i)))?;
+            }
+            VtkField::Body => a.array("body", 1, n, (0..n).map(|i| i32::from(d.body(i))))?,
             VtkField::Material => {
-                a.array("material", 1, n, p.material.iter().map(|&m| i32::from(m)))?;
+                a.array("material", 1, n, (0..n).map(|i| i32::from(d.material(i))))?;
             }
-            VtkField::Density => a.array("density", 1, n, (0..n).map(|i| p.density(i)))?,
+            VtkField::Density => a.array("density", 1, n, (0..n).map(|i| d.density(i)))?,
         }
     }
     a.xml.push_str("      </PointData>\n      <Points>\n");
-    a.array("position", 3, n, p.position.iter().flat_map(|x| [x.x, x.y, 0.0]))?;
+    a.array("position", 3, n, (0..n).flat_map(|i| d.position(i)))?;
     a.xml.push_str("      </Points>\n      <Verts>\n");
     a.array("connectivity", 1, n, 0..n as i64)?;
     a.array("offsets", 1, n, 1..=n as i64)?;

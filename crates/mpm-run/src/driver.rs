@@ -472,6 +472,7 @@ impl Driver<'_> {
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
             initial_state: self.initial.clone(),
             warnings: r.warnings.iter().map(ToString::to_string).collect(),
+            dimension: 2,
         }
     }
 

@@ -13,6 +13,9 @@
 //! - [`Simulation`] is a run advanced by its caller, step by step or to a time, with the
 //!   particles' fields, the energy ledger and checkpoints between calls (for bindings and
 //!   coupling).
+//! - [`run_space_scene`] and [`check_space_scene`] do the same for 3D scenes (`[grid]
+//!   dimension = 3`, read by [`load_space_str`] or [`load_any_scene_file`]) with the 3D build
+//!   of the solver.
 //! - [`run_element_test`] runs the constitutive element tests.
 //! - [`Progress`] receives a run's progress, warnings and reports; nothing is printed without
 //!   one.
@@ -56,6 +59,7 @@ mod options;
 mod progress;
 mod run;
 mod simulation;
+mod space;
 
 pub use progress::{Progress, ProgressSink};
 
@@ -67,10 +71,12 @@ pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
 pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation};
+pub use space::{check_space_scene, run_space_scene};
 // The scene library, re-exported so that a front end needs one import path.
 pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
 pub use mpm_scene::{
-    DEFAULT_ENERGY_ALARM, DEFAULT_SCENE, SCENES, Scene, SceneError, embedded_scene,
-    load_scene_file, load_scene_str, title_of,
+    AnyScene, DEFAULT_ENERGY_ALARM, DEFAULT_SCENE, SCENES, Scene, SceneError, SpaceScene,
+    declared_dimension, embedded_scene, load_any_scene_file, load_scene_file, load_scene_str,
+    load_space_str, title_of,
 };
 pub use mpm_scene::{file as scene, limits, presets};

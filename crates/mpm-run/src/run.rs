@@ -30,8 +30,8 @@ pub use crate::options::RunOptions;
 pub struct CheckReport {
     /// particles generated.
     pub particles: usize,
-    /// grid cells (columns × rows, or nx × ny).
-    pub cells: [usize; 2],
+    /// grid cells (columns × rows, or nx × ny, or nx × ny × nz in 3D).
+    pub cells: Vec<usize>,
     /// active grid nodes at t = 0.
     pub active_nodes: usize,
     /// Δt of the first step (s).
@@ -73,8 +73,8 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
                 active.extend(stencil.nodes);
             }
             let cells = match &r.grid {
-                GridBuilt::Terrain(t) => [t.columns(), t.rows()],
-                GridBuilt::Regular(g) => g.cells(),
+                GridBuilt::Terrain(t) => vec![t.columns(), t.rows()],
+                GridBuilt::Regular(g) => g.cells().to_vec(),
             };
             let frames =
                 if r.output.vtk { (r.end_time / r.output.interval).ceil() as u64 + 1 } else { 0 };
@@ -292,7 +292,7 @@ fn fits_its_scene(c: &CheckpointFile, scene: &Scene) -> Result<(), String> {
 /// runs `f` in a pool of the requested threads (default: one per core), but no more than a
 /// scene of `particles` particles can use (`mpm_solver::useful_threads`): a small scene on two
 /// threads would only pay for the hand-offs. The results are the same for any count.
-fn with_pool<T>(
+pub(crate) fn with_pool<T>(
     opts: &RunOptions,
     particles: usize,
     f: impl FnOnce(usize) -> Result<T, RunError> + Send,

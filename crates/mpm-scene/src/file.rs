@@ -18,7 +18,12 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 pub use mpm_solver::{Contact, MassMatrix, Scheme, Transfer};
 
 mod boundary;
+mod space;
 pub use boundary::BoundarySpec;
+pub use space::{
+    Axis, SpaceBodySpec, SpaceBoundariesSpec, SpaceFile, SpaceGridSpec, SpaceShapeKind,
+    SpaceWallSpec,
+};
 
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -143,6 +148,10 @@ pub struct GridSpec {
     /// regular: number of cells `[nx, ny]`.
     #[serde(default, deserialize_with = "exact::pair")]
     pub cells: Option<[i64; 2]>,
+    /// 2 (the default: plane strain in x–y) or 3 (x, y up, z: the scene is read as
+    /// [`SpaceFile`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dimension: Option<i64>,
 }
 
 /// `[materials.NAME]`: `kind` (a model of the registry, [`crate::materials::KINDS`]),
@@ -333,9 +342,10 @@ pub struct SolverSpec {
     pub dt: Option<f64>,
     /// simulated end time (s).
     pub end_time: f64,
-    /// gravity `[gx, gy]` (m/s²), default `[0, -9.81]`.
-    #[serde(default, deserialize_with = "exact::pair")]
-    pub gravity: Option<[f64; 2]>,
+    /// gravity `[gx, gy]` (m/s²), default `[0, -9.81]`; `[gx, gy, gz]` in a 3D scene, default
+    /// `[0, -9.81, 0]`.
+    #[serde(default, deserialize_with = "exact::pair_or_triple")]
+    pub gravity: Option<Vec<f64>>,
     /// gravity ramp time (s), default 0.
     #[serde(default)]
     pub gravity_ramp: Option<f64>,
@@ -725,6 +735,45 @@ mod exact {
         d: D,
     ) -> Result<[T; 2], D::Error> {
         Ok(Two::<T>::deserialize(d)?.0)
+    }
+
+    /// `[a, b, c]` and nothing else.
+    pub struct Three<T>(pub [T; 3]);
+
+    impl<'de, T: Deserialize<'de>> Deserialize<'de> for Three<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            let v = Vec::<T>::deserialize(d)?;
+            let n = v.len();
+            <[T; 3]>::try_from(v).map(Three).map_err(|_| {
+                D::Error::custom(format!("expected exactly 3 values [x, y, z], found {n}"))
+            })
+        }
+    }
+
+    /// an optional `[a, b, c]`.
+    pub fn triple<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<[T; 3]>, D::Error> {
+        Ok(Option::<Three<T>>::deserialize(d)?.map(|t| t.0))
+    }
+
+    /// a required `[a, b, c]`.
+    pub fn required_triple<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<[T; 3], D::Error> {
+        Ok(Three::<T>::deserialize(d)?.0)
+    }
+
+    /// an optional `[a, b]` or `[a, b, c]` (a vector of the scene's dimension, checked with it).
+    pub fn pair_or_triple<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<f64>>, D::Error> {
+        let v = Option::<Vec<f64>>::deserialize(d)?;
+        match v {
+            Some(v) if !(2..=3).contains(&v.len()) => Err(D::Error::custom(format!(
+                "expected 2 values [x, y] (3 in a 3D scene), found {}",
+                v.len()
+            ))),
+            other => Ok(other),
+        }
     }
 
     /// an optional list of `[a, b]`.

@@ -45,6 +45,7 @@ pub mod presets;
 mod scene;
 mod scenes;
 mod source;
+pub mod space;
 pub mod summary;
 mod validate;
 
@@ -57,17 +58,47 @@ pub use scene::{
     ResolvedOutput, Scene, Seed, StopAtRest, Warning, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
+pub use space::{SpaceScene, declared_dimension, dispatch_space};
 pub use summary::{
     DtStats, EnergyReport, InitialStateSummary, RunStatus, RunSummary, RunoutIndicators,
     RunoutMetrics, RunoutReport,
 };
 pub use validate::plausible::WARNINGS;
-pub use validate::{load_scene_str, load_scene_str_in};
+pub use validate::{load_scene_str, load_scene_str_in, load_space_str};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
 /// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
 /// refused before parsing; at most that many bytes are read, whatever the file is.
 pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
+    let text = read_scene_text(path)?;
+    let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    load_scene_str_in(&text, &path.display().to_string(), dir)
+}
+
+/// A validated scene of either dimension.
+#[derive(Clone, Debug)]
+pub enum AnyScene {
+    /// a plane-strain scene (the default).
+    Plane(Box<Scene>),
+    /// a 3D scene (`[grid] dimension = 3`).
+    Space(Box<SpaceScene>),
+}
+
+/// Reads and validates the scene file at `path`, 2D or 3D as its `[grid] dimension` says
+/// ([`declared_dimension`]); refusals as [`load_scene_file`]'s.
+pub fn load_any_scene_file(path: &std::path::Path) -> Result<AnyScene, SceneError> {
+    let text = read_scene_text(path)?;
+    let origin = path.display().to_string();
+    if declared_dimension(&text) == 3 {
+        return Ok(AnyScene::Space(Box::new(load_space_str(&text, &origin)?)));
+    }
+    let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    Ok(AnyScene::Plane(Box::new(load_scene_str_in(&text, &origin, dir)?)))
+}
+
+/// The text of the scene file at `path`, refused (as a [`SceneError`] for the file) when it is
+/// not a regular file, is larger than [`limits::MAX_SCENE_BYTES`] or is not UTF-8.
+fn read_scene_text(path: &std::path::Path) -> Result<String, SceneError> {
     use std::io::Read;
     let origin = path.display().to_string();
     let refuse = |problem: String, admissible: &str, fix: &str| SceneError {
@@ -116,6 +147,5 @@ pub fn load_scene_file(path: &std::path::Path) -> Result<Scene, SceneError> {
             "pass the scene's .toml file (`mpm scenes --write flume` writes an example)",
         )
     })?;
-    let dir = path.parent().unwrap_or(std::path::Path::new(""));
-    load_scene_str_in(&text, &origin, dir)
+    Ok(text)
 }

@@ -164,6 +164,14 @@ pub struct RunSummary {
     /// the scene's plausibility warnings (`mpm check` prints them; `silence` turns one off).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// 2 (plane strain: energies in J per metre of thickness) or 3 (energies in J).
+    #[serde(default = "plane")]
+    pub dimension: u8,
+}
+
+/// the dimension of a summary written before 3D scenes existed.
+fn plane() -> u8 {
+    2
 }
 
 /// What the initial-state stage of a run did (`[initial_state]`).

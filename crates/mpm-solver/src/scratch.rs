@@ -145,6 +145,8 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// a_i after boundary conditions. The end-of-step velocity is never stored: it is
     /// v_i^L = v_i + a_i Δt (eq 5), an identity the contact layer keeps at boundary nodes too.
     pub(crate) acceleration: Vec<Vector>,
+    /// v_i^L = v_i + a_i Δt (eq 5) per active node, formed once for APIC's grid to particle.
+    pub(crate) end_velocity: Vec<Vector>,
     /// Nodes on a declared boundary or near a wall.
     pub(crate) boundary: Vec<BoundaryNode>,
     /// The planes of the boundary nodes (`BoundaryNode::planes`).
@@ -205,6 +207,7 @@ impl<F, const N: usize> Scratch<F, N> {
             velocity: Vec::new(),
             force: Vec::new(),
             acceleration: Vec::new(),
+            end_velocity: Vec::new(),
             boundary: Vec::new(),
             node_planes: Vec::new(),
             plane_buf: Vec::new(),
@@ -244,7 +247,10 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.patch_mass.capacity() * size_of::<Real>()
             + (self.patch_momentum.capacity() + self.patch_force.capacity()) * size_of::<Vector>()
             + self.mass.capacity() * size_of::<Real>()
-            + (self.velocity.capacity() + self.force.capacity() + self.acceleration.capacity())
+            + (self.velocity.capacity()
+                + self.force.capacity()
+                + self.acceleration.capacity()
+                + self.end_velocity.capacity())
                 * size_of::<Vector>()
             + self.boundary.capacity() * size_of::<BoundaryNode>()
             + self.node_planes.capacity() * size_of::<NodePlane>()

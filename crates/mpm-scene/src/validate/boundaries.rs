@@ -178,6 +178,20 @@ fn friction(ctx: &Ctx<'_>, path: &str, spec: BoundarySpec) -> Result<Friction, S
     })
 }
 
+/// a friction law for the 3D build of the contact layer (the same law, validated by the 2D
+/// one's rules).
+pub(super) fn friction_3d(
+    ctx: &Ctx<'_>,
+    path: &str,
+    spec: BoundarySpec,
+) -> Result<mpm_contact3d::Friction, SceneError> {
+    Ok(match friction(ctx, path, spec)? {
+        Friction::Coulomb { mu } => mpm_contact3d::Friction::Coulomb { mu },
+        Friction::Rough => mpm_contact3d::Friction::Rough,
+        Friction::Fixed => mpm_contact3d::Friction::Fixed,
+    })
+}
+
 fn contact_error(ctx: &Ctx<'_>, path: &str, e: ContactError) -> SceneError {
     match e {
         ContactError::InvalidFrictionCoefficient { mu, .. } => ctx.range(

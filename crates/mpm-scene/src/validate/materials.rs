@@ -7,15 +7,15 @@ use mpm_constitutive::ConstitutiveError;
 
 use super::{Ctx, describe, finite_pos, join, num};
 use crate::error::SceneError;
-use crate::file::SceneFile;
+use crate::file::MaterialSpec;
 use crate::materials::{AnyModel, BuildError, KINDS, MaterialsBuilt};
 
 /// Builds every declared material, by name.
 pub(super) fn build<'a>(
     ctx: &Ctx<'_>,
-    f: &'a SceneFile,
+    materials: &'a BTreeMap<String, MaterialSpec>,
 ) -> Result<BTreeMap<&'a str, AnyModel>, SceneError> {
-    if f.materials.is_empty() {
+    if materials.is_empty() {
         return Err(ctx.err(
             "materials",
             None,
@@ -26,7 +26,7 @@ pub(super) fn build<'a>(
     }
     let kinds = || KINDS.iter().map(|k| format!("\"{k}\"")).collect::<Vec<_>>().join(", ");
     let mut built = BTreeMap::new();
-    for (name, m) in &f.materials {
+    for (name, m) in materials {
         let base = format!("materials.{name}");
         let p = |field: &str| format!("{base}.{field}");
         let kind = match m.0.get("kind") {
@@ -104,23 +104,24 @@ pub(super) fn build<'a>(
 /// of one model or of several: (materials, their names).
 pub(super) fn select<'a>(
     ctx: &Ctx<'_>,
-    f: &'a SceneFile,
+    materials: &'a BTreeMap<String, MaterialSpec>,
+    bodies: &[&'a str],
     built: &BTreeMap<&'a str, AnyModel>,
 ) -> Result<(MaterialsBuilt, Vec<&'a str>), SceneError> {
     let mut used: Vec<&str> = Vec::new();
-    for (b, body) in f.bodies.iter().enumerate() {
-        if !built.contains_key(body.material.as_str()) {
-            let names: Vec<String> = f.materials.keys().map(|n| format!("\"{n}\"")).collect();
+    for (b, &material) in bodies.iter().enumerate() {
+        if !built.contains_key(material) {
+            let names: Vec<String> = materials.keys().map(|n| format!("\"{n}\"")).collect();
             return Err(ctx.err(
                 &format!("bodies[{b}].material"),
-                Some(format!("\"{}\"", body.material)),
+                Some(format!("\"{material}\"")),
                 "no material of this name",
                 format!("one of {}", names.join(", ")),
-                format!("define [materials.{}] or use a defined name", body.material),
+                format!("define [materials.{material}] or use a defined name"),
             ));
         }
-        if !used.contains(&body.material.as_str()) {
-            used.push(body.material.as_str());
+        if !used.contains(&material) {
+            used.push(material);
         }
     }
     used.sort_unstable();

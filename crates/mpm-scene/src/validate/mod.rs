@@ -20,6 +20,9 @@ mod output;
 pub mod plausible;
 mod polyline;
 mod solver;
+mod space;
+
+pub use space::load_space_str;
 
 use crate::error::SceneError;
 use crate::file::*;
@@ -132,6 +135,16 @@ pub fn load_scene_str_in(
 fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene, SceneError> {
     let map = SourceMap::new(text);
     let ctx = Ctx { origin, map: &map, dir };
+    if crate::space::declared_dimension(text) == 3 {
+        return Err(ctx.err(
+            "grid.dimension",
+            Some("3".into()),
+            "a 3D scene, given to a reader of 2D scenes",
+            "a 2D scene here; 3D scenes are read by `load_space_str` and run by `mpm run`",
+            "run it with `mpm run` (the Python package and the studies read 2D scenes only, \
+             for now)",
+        ));
+    }
     let file: SceneFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
     let r = resolve(&ctx, &file)?;
     Ok(Scene {
@@ -279,12 +292,22 @@ fn finite_pos(x: f64) -> bool {
 
 /// Checks the sections in the order the module docs give and derives what the run needs.
 fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
+    if let Some(d) = f.grid.dimension.filter(|&d| d != 2) {
+        return Err(ctx.err(
+            "grid.dimension",
+            Some(d.to_string()),
+            "a scene is 2D (the default) or 3D",
+            "2 or 3",
+            "remove `dimension` for a 2D scene, or write `dimension = 3`",
+        ));
+    }
     let settings = solver::settings(ctx, &f.solver)?;
     let (grid, ground, cell_x) = grid::build(ctx, &f.grid)?;
     let shape_function = grid::shape_function(ctx, &f.solver, settings.preset, &grid)?;
-    let built = materials::build(ctx, f)?;
+    let built = materials::build(ctx, &f.materials)?;
     bodies::count(ctx, f)?;
-    let (materials, used) = materials::select(ctx, f, &built)?;
+    let bodies: Vec<&str> = f.bodies.iter().map(|b| b.material.as_str()).collect();
+    let (materials, used) = materials::select(ctx, &f.materials, &bodies, &built)?;
     let (seeds, spacing, gimp_ppc) =
         bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
     let boundaries = boundaries::build(ctx, f)?;

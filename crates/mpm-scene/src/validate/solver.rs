@@ -79,7 +79,19 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
         }
         (None, None) => TimeStep::Courant(preset.map_or(DEFAULT_COURANT, |p| p.courant)),
     };
-    let gravity = s.gravity.unwrap_or([0.0, -mpm_solver::STANDARD_GRAVITY]);
+    let gravity = match s.gravity.as_deref() {
+        None => [0.0, -mpm_solver::STANDARD_GRAVITY],
+        Some(&[gx, gy]) => [gx, gy],
+        Some(g) => {
+            return Err(ctx.err(
+                "solver.gravity",
+                Some(format!("{g:?}")),
+                format!("{} components in a 2D scene", g.len()),
+                "[gx, gy] (m/s²) in 2D; [gx, gy, gz] with `dimension = 3` in [grid]",
+                "give two components, or add `dimension = 3` to [grid] for a 3D scene",
+            ));
+        }
+    };
     if !(gravity[0].is_finite() && gravity[1].is_finite()) {
         return Err(ctx.err(
             "solver.gravity",

@@ -122,9 +122,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// APIC grid to particle: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p.
     fn g2p_apic(&mut self, dt: Real) -> Result<(), SolverError> {
+        // v_i^L = v_i + a_i Δt (eq 5) once per node instead of once per particle and node (the
+        // same operations: the same bits)
+        let sc = &mut self.scratch;
+        sc.end_velocity.clear();
+        let (v, a) = (&sc.velocity, &sc.acceleration);
+        sc.end_velocity.par_extend(v.par_iter().zip(a).map(|(v, a)| *v + *a * dt));
         let sc = &self.scratch;
         let (idx, factors, shape) = (&sc.node_index, &sc.factors, &self.shape);
-        let (a, v) = (&sc.acceleration, &sc.velocity);
+        let end = &sc.end_velocity;
         let step = self.step + 1;
         let p = &mut self.particles;
         let chunk = chunk_len(p.len());
@@ -141,8 +147,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let mut v_new = Vector::ZERO;
                     let mut c_new = Matrix::ZERO;
                     for k in 0..N {
-                        let i = idx[q][k] as usize;
-                        let v_end = v[i] + a[i] * dt;
+                        let v_end = end[idx[q][k] as usize];
                         v_new += w[k] * v_end;
                         let g = grad[k];
                         c_new += outer(v_end, g);

@@ -193,6 +193,21 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 {
                     let n = face.normal();
                     sc.held.push((b.node, n));
+                    // (3D) a node sliding along the edge of two planes ends with no velocity
+                    // along either normal: the second normal's part orthogonal to the first is
+                    // corrected too.
+                    #[cfg(feature = "dim3")]
+                    if out.velocity != Vector::ZERO {
+                        let scale = 1e-9 * out.velocity.length();
+                        let second = planes
+                            .iter()
+                            .filter(pushing)
+                            .filter(|p| out.velocity.dot(p.normal()).abs() <= scale)
+                            .find_map(|p| (p.normal() - p.normal().dot(n) * n).try_normalize());
+                        if let Some(m) = second {
+                            sc.held.push((b.node, m));
+                        }
+                    }
                     let pressed = planes.iter().filter(|p| trial.dot(p.normal()) < 0.0).count();
                     if out.velocity == Vector::ZERO && pressed >= 2 {
                         for t in crate::math::tangents(n) {

@@ -1,0 +1,535 @@
+//! The run driver of 3D scenes (`[grid] dimension = 3`): the 3D build of the solver
+//! (`mpm-solver3d`) stepped to the end time by an observer that records the energy ledger and
+//! the runout measures, writes frames and watches for alarms, rest, limits and interrupts, then
+//! `summary.json` in the 2D runs' format.
+//!
+//! The runout measures are the 2D ones taken in the vertical plane of the runout direction
+//! (`SpaceScene::runout_direction`): a particle at x counts at station x·d and height y, so
+//! the front, tail, thickness (over the whole width) and travel angle follow that direction;
+//! the centre of mass's travel is its 3D distance. Not yet in 3D: checkpoints and `mpm resume`
+//! (an interrupted 3D run writes its files and summary, no checkpoint), probes, envelopes, the
+//! observed deposit, plots.
+
+use std::ops::ControlFlow;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use glam::DVec2;
+use mpm_grid3d::ShapeFunctions;
+use mpm_output::checkpoint::state_hash;
+use mpm_output::csv::{self, EnergyRow};
+use mpm_output::dir::prepare_dir;
+use mpm_output::{OutputError, atomic, vtk};
+use mpm_scene::dispatch::SceneModel;
+use mpm_scene::space::{SpaceJob, space_particles};
+use mpm_scene::summary::{
+    self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
+};
+use mpm_scene::{SceneError, SpaceScene, dispatch_space, fnv1a};
+use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport};
+
+use crate::error::RunError;
+use crate::options::RunOptions;
+use crate::progress::ProgressSink;
+use crate::run::{CheckReport, with_pool};
+
+/// the 3D ledger as the summary's (the same fields; J, not J/m).
+fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
+    mpm_solver::EnergyLedger {
+        kinetic: l.kinetic,
+        strain: l.strain,
+        potential: l.potential,
+        plastic_dissipation: l.plastic_dissipation,
+        friction_work: l.friction_work,
+        constraint_work: l.constraint_work,
+        transfer_dissipation: l.transfer_dissipation,
+        external_work: l.external_work,
+        residual: l.residual,
+    }
+}
+
+fn refused(scene: &SpaceScene, message: &str) -> RunError {
+    RunError::from(SceneError {
+        origin: scene.origin().to_string(),
+        line: None,
+        column: None,
+        path: "bodies".into(),
+        value: None,
+        problem: format!("the solver refused the scene: {message}"),
+        admissible: String::new(),
+        fix: "check the bodies' positions and materials".into(),
+    })
+}
+
+/// Validates a 3D scene fully without stepping: every particle located, and particles, active
+/// nodes, steps, memory and frames estimated (as [`crate::check_scene`]).
+pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
+    struct CheckJob;
+    impl SpaceJob for CheckJob {
+        type Output = Result<CheckReport, RunError>;
+        fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+            self,
+            scene: &SpaceScene,
+            shape: S,
+            _materials: Vec<M>,
+        ) -> Self::Output {
+            let mut active = std::collections::HashSet::new();
+            for (i, seed) in scene.seeds.iter().enumerate() {
+                let stencil = shape.stencil(seed.position).map_err(|e| {
+                    refused(scene, &format!("particle {i} at {}: {e}", seed.position))
+                })?;
+                active.extend(stencil.nodes);
+            }
+            let o = &scene.output;
+            let frames = if o.vtk { (scene.end_time / o.interval).ceil() as u64 + 1 } else { 0 };
+            let apic = scene.config.transfer == mpm_solver3d::Transfer::Apic;
+            let n = scene.seeds.len();
+            Ok(CheckReport {
+                particles: n,
+                cells: scene.grid.cells().to_vec(),
+                active_nodes: active.len(),
+                initial_dt: scene.initial_dt,
+                estimated_steps: (scene.end_time / scene.initial_dt).ceil() as u64,
+                initial_state_steps: None,
+                memory_bytes: mpm_solver3d::estimated_bytes(
+                    n,
+                    active.len(),
+                    N,
+                    size_of::<M::State>(),
+                    apic,
+                ) as usize,
+                frames,
+                frame_bytes: frames * o.vtk_format.frame_bytes(n, &o.fields),
+            })
+        }
+    }
+    dispatch_space(scene, CheckJob)?
+}
+
+/// Runs a 3D scene to its end time (see [`RunOptions`]; `stop_after` and `interrupt` stop it
+/// without a checkpoint). Returns the summary of a completed, stopped or interrupted run; a
+/// solver instability returns [`RunError::Solver`] after writing the files reached so far.
+pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    let _lock = match &opts.out_dir {
+        Some(dir) => {
+            let lock = prepare_dir(dir, opts.force)?;
+            atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
+            Some(lock)
+        }
+        None => None,
+    };
+    for w in &scene.warnings {
+        opts.progress.warn(&w.to_string());
+    }
+    with_pool(opts, scene.seeds.len(), |threads| dispatch_space(scene, SpaceRun { opts, threads })?)
+}
+
+struct SpaceRun<'a> {
+    opts: &'a RunOptions,
+    threads: usize,
+}
+
+impl SpaceJob for SpaceRun<'_> {
+    type Output = Result<RunSummary, RunError>;
+
+    fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        self,
+        scene: &SpaceScene,
+        shape: S,
+        materials: Vec<M>,
+    ) -> Self::Output {
+        let particles = space_particles(&scene.seeds, &materials);
+        let mut solver = Solver::new(shape, materials, particles, scene.config.clone())
+            .map_err(|e| refused(scene, &e.to_string()))?;
+        let mut d = SpaceDriver::begin(scene, self.opts, &solver);
+        d.progress.start(scene.end_time, 0.0, 0);
+        d.record(&solver);
+        d.write_frame(&solver)?;
+        d.flush()?;
+        let start = Instant::now();
+        let result = solver.run_until(scene.end_time, &mut d);
+        d.wall_time = start.elapsed().as_secs_f64();
+        d.progress.finish();
+        if let Some(e) = d.io_error.take() {
+            return Err(e);
+        }
+        let (status, error) = match (&result, d.stop) {
+            (Err(e), _) => (RunStatus::Failed, Some(e.to_string())),
+            (Ok(RunEnd::EndTime), _) => (RunStatus::Completed, None),
+            (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
+                RunStatus::StepLimit,
+                Some(format!(
+                    "step limit: {} steps reached at t = {:.6e} s before end_time = {} s",
+                    solver.step_count(),
+                    solver.time(),
+                    scene.end_time
+                )),
+            ),
+            (Ok(RunEnd::Stopped), Some(Stop::AtRest)) => (RunStatus::AtRest, None),
+            (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
+                (RunStatus::EnergyAlarm, d.alarm_message())
+            }
+            (Ok(RunEnd::Stopped), None) => (
+                RunStatus::Interrupted,
+                Some("interrupted (3D runs write no checkpoint yet: run the scene again)".into()),
+            ),
+        };
+        let summary = d.finish(&solver, status, error, self.threads)?;
+        match result {
+            Err(e) => Err(RunError::Solver { message: e.to_string(), summary: Box::new(summary) }),
+            Ok(_) => Ok(summary),
+        }
+    }
+}
+
+/// Why the driver stopped a run before its end time (other than an interrupt).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stop {
+    EnergyAlarm,
+    StepLimit,
+    AtRest,
+}
+
+/// A slot time counts as reached within this fraction of the interval (as in 2D).
+const SLOT_SLACK: f64 = 1e-9;
+
+fn slot(t: f64, interval: f64) -> u64 {
+    (t / interval + SLOT_SLACK).floor().max(0.0) as u64
+}
+
+struct SpaceDriver<'a> {
+    scene: &'a SpaceScene,
+    dir: Option<&'a Path>,
+    progress: ProgressSink,
+    interrupt: Option<Arc<AtomicBool>>,
+    stop_after: Option<f64>,
+    io_error: Option<RunError>,
+    stop: Option<Stop>,
+    /// the floor as a polyline in the runout plane (station along the runout direction, y).
+    ground: Vec<DVec2>,
+    /// the particle spacing (m).
+    spacing: f64,
+    /// the centre of mass at t = 0 (m).
+    com0: mpm_solver3d::Vector,
+    energy: Vec<EnergyRow>,
+    runout: Vec<RunoutMetrics>,
+    frames: Vec<(f64, String)>,
+    flushed: [usize; 2],
+    check: EnergyCheck,
+    alarm_time: Option<f64>,
+    rest_peak: f64,
+    rest_since: Option<f64>,
+    series_slot: u64,
+    frame_slot: u64,
+    dt: DtStats,
+    output_time: f64,
+    wall_time: f64,
+}
+
+impl<'a> SpaceDriver<'a> {
+    fn begin<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        scene: &'a SpaceScene,
+        opts: &'a RunOptions,
+        solver: &Solver<M, S, N>,
+    ) -> Self {
+        let g = &scene.grid;
+        let d = scene.runout_direction;
+        let (lo, hi) = (g.origin(), g.upper_corner());
+        let corners = [lo.x, hi.x]
+            .into_iter()
+            .flat_map(|x| [lo.z, hi.z].map(|z| mpm_solver3d::Vector::new(x, 0.0, z).dot(d)));
+        let (s0, s1) =
+            corners.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| (a.min(s), b.max(s)));
+        let p = solver.particles();
+        let y0 = lo.y;
+        let check = EnergyCheck::new(
+            &solver.energy(),
+            &p.position,
+            &p.mass,
+            scene.config.gravity.length(),
+            |_| y0,
+        );
+        let mass: f64 = p.mass.iter().sum();
+        let com0 =
+            p.position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<mpm_solver3d::Vector>()
+                / mass;
+        SpaceDriver {
+            scene,
+            dir: opts.out_dir.as_deref(),
+            progress: opts.progress.clone(),
+            interrupt: opts.interrupt.clone(),
+            stop_after: opts.stop_after,
+            io_error: None,
+            stop: None,
+            ground: vec![DVec2::new(s0, y0), DVec2::new(s1, y0)],
+            spacing: g.cell_size().x / scene.gimp_ppc as f64,
+            com0,
+            energy: Vec::new(),
+            runout: Vec::new(),
+            frames: Vec::new(),
+            flushed: [0; 2],
+            check,
+            alarm_time: None,
+            rest_peak: 0.0,
+            rest_since: None,
+            series_slot: 0,
+            frame_slot: 0,
+            dt: DtStats { min: f64::INFINITY, ..DtStats::default() },
+            output_time: 0.0,
+            wall_time: 0.0,
+        }
+    }
+
+    /// the runout measures now, in the vertical plane of the runout direction.
+    fn metrics<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> RunoutMetrics {
+        let p = solver.particles();
+        let d = self.scene.runout_direction;
+        let mask = self.scene.materials.flow_mask();
+        let keep: Vec<usize> = (0..p.len())
+            .filter(|&q| {
+                mask.as_ref()
+                    .is_none_or(|m| m.get(usize::from(p.material[q])).copied().unwrap_or(true))
+            })
+            .collect();
+        let plane = |v: &[mpm_solver3d::Vector]| -> Vec<DVec2> {
+            keep.iter().map(|&q| DVec2::new(v[q].dot(d), v[q].y)).collect()
+        };
+        let (position, velocity) = (plane(&p.position), plane(&p.velocity));
+        let mass: Vec<f64> = keep.iter().map(|&q| p.mass[q]).collect();
+        let mut m = summary::runout(
+            solver.time(),
+            [&position, &velocity],
+            &mass,
+            &self.ground,
+            self.spacing,
+            self.scene.grid.cell_size().x,
+            self.runout.first(),
+        );
+        let total: f64 = mass.iter().sum();
+        let com =
+            keep.iter().map(|&q| p.position[q] * p.mass[q]).sum::<mpm_solver3d::Vector>() / total;
+        m.com_travel = (com - self.com0).length();
+        m
+    }
+
+    fn record<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) {
+        let t = solver.time();
+        let l = solver.energy();
+        let relative = self.check.observe(t, &l);
+        let alarm = self.scene.alarm;
+        if self.alarm_time.is_none() && relative.abs() > alarm.threshold {
+            self.alarm_time = Some(t);
+            self.progress.warn(&format!(
+                "energy alarm at t = {t:.4} s: |energy residual| is {:.1} % of the energy scale \
+                 (threshold {:.1} %)",
+                100.0 * relative.abs(),
+                100.0 * alarm.threshold
+            ));
+            if alarm.stop {
+                self.stop = Some(Stop::EnergyAlarm);
+            }
+        }
+        if let Some(rest) = self.scene.stop_at_rest {
+            self.rest_peak = self.rest_peak.max(l.kinetic);
+            if self.rest_peak > 0.0 && l.kinetic <= rest.kinetic_fraction * self.rest_peak {
+                let since = *self.rest_since.get_or_insert(t);
+                if t - since >= rest.duration {
+                    self.stop.get_or_insert(Stop::AtRest);
+                }
+            } else {
+                self.rest_since = None;
+            }
+        }
+        self.energy.push(EnergyRow {
+            time: t,
+            step: solver.step_count(),
+            dt: solver.last_report().dt,
+            ledger: ledger(&l),
+        });
+        let m = self.metrics(solver);
+        self.runout.push(m);
+    }
+
+    fn write_frame<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let o = &self.scene.output;
+        let Some(dir) = self.dir.filter(|_| o.vtk) else { return Ok(()) };
+        let clock = Instant::now();
+        let name = format!("frames/particles_{:06}.vtp", self.frames.len());
+        let path = dir.join(&name);
+        if self.frames.is_empty() {
+            std::fs::create_dir_all(dir.join("frames"))
+                .map_err(|source| OutputError::Io { path: dir.join("frames"), source })?;
+        }
+        let frame = vtk::frame_3d(
+            solver.particles(),
+            solver.materials(),
+            &o.fields,
+            o.vtk_format,
+            solver.time(),
+        )
+        .map_err(|source| RunError::from(OutputError::Io { path: path.clone(), source }))?;
+        atomic::write_parts(&path, &frame.parts())?;
+        self.frames.push((solver.time(), name));
+        atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.frames).as_bytes())?;
+        self.output_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        let clock = Instant::now();
+        let [e, r] = &mut self.flushed;
+        csv::flush(&dir.join("energy.csv"), csv::ENERGY_HEADER, &self.energy, e, csv::energy)?;
+        csv::flush(&dir.join("runout.csv"), csv::RUNOUT_HEADER, &self.runout, r, csv::runout)?;
+        self.output_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn alarm_message(&self) -> Option<String> {
+        let t = self.alarm_time?;
+        Some(format!(
+            "energy alarm: at t = {t:.4} s the energy residual exceeded {:.1} % of the run's \
+             energy scale (`[solver] energy_alarm`); the worst was {:+.1} % at t = {:.4} s",
+            100.0 * self.scene.alarm.threshold,
+            100.0 * self.check.worst,
+            self.check.worst_time
+        ))
+    }
+
+    fn finish<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &mut self,
+        solver: &Solver<M, S, N>,
+        status: RunStatus,
+        error: Option<String>,
+        threads: usize,
+    ) -> Result<RunSummary, RunError> {
+        let t = solver.time();
+        if self.energy.last().is_none_or(|row| row.time < t) {
+            self.record(solver);
+        }
+        if self.frames.last().is_none_or(|f| f.0 < t) {
+            self.write_frame(solver)?;
+        }
+        let (status, error) = match status {
+            RunStatus::Completed | RunStatus::AtRest if self.alarm_time.is_some() => {
+                (RunStatus::EnergyAlarm, self.alarm_message())
+            }
+            _ => (status, error),
+        };
+        self.flush()?;
+        let scene = self.scene;
+        let steps = solver.step_count();
+        let n = solver.particles().len();
+        let p = solver.particles();
+        let d = scene.runout_direction;
+        let crown = p
+            .initial_position
+            .iter()
+            .map(|x| DVec2::new(x.dot(d), x.y))
+            .max_by(|a, b| a.y.total_cmp(&b.y))
+            .map_or(DVec2::ZERO, |c| c + DVec2::new(0.0, 0.5 * self.spacing));
+        let kinetic: Vec<(f64, f64)> =
+            self.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
+        let mut check = self.check;
+        let summary = RunSummary {
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene_origin: scene.origin().to_string(),
+            scene_hash: format!("{:016x}", fnv1a(scene.text().as_bytes())),
+            status,
+            error,
+            particles: n,
+            scheme: scene.config.scheme.name().to_string(),
+            shape_function: scene.shape_function.name().to_string(),
+            steps,
+            simulated_time: t,
+            end_time: scene.end_time,
+            dt: DtStats {
+                min: if self.dt.min.is_finite() { self.dt.min } else { 0.0 },
+                mean: if steps > 0 { t / steps as f64 } else { 0.0 },
+                ..self.dt
+            },
+            wall_time_s: self.wall_time,
+            particle_steps_per_s: if self.wall_time > 0.0 {
+                steps as f64 * n as f64 / self.wall_time
+            } else {
+                0.0
+            },
+            output_time_s: self.output_time,
+            threads,
+            energy: ledger(&solver.energy()),
+            energy_check: EnergyReport {
+                relative_residual: check.observe(t, &solver.energy()),
+                worst_relative_residual: check.worst,
+                worst_time: check.worst_time,
+                alarm_threshold: scene.alarm.threshold,
+                alarm_time: self.alarm_time,
+            },
+            runout: RunoutReport {
+                last: self.runout.last().copied().unwrap_or_default(),
+                indicators: summary::indicators(&self.runout, &kinetic, crown, &self.ground),
+            },
+            observed: None,
+            state_hash: state_hash(&solver.checkpoint()),
+            initial_state: None,
+            warnings: scene.warnings.iter().map(ToString::to_string).collect(),
+            dimension: 3,
+        };
+        if let Some(dir) = self.dir {
+            let json = serde_json::to_string_pretty(&summary)
+                .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
+            atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+        }
+        Ok(summary)
+    }
+}
+
+impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for SpaceDriver<'_> {
+    fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
+        let scene = self.scene;
+        if !mpm_solver3d::reached(report.time, scene.end_time) || self.dt.max == 0.0 {
+            self.dt.min = self.dt.min.min(report.dt);
+        }
+        self.dt.max = self.dt.max.max(report.dt);
+        if self.dt.first == 0.0 {
+            self.dt.first = report.dt;
+        }
+        let t = report.time;
+        let series = slot(t, scene.output.series_interval);
+        if series > self.series_slot {
+            self.series_slot = series;
+            self.record(solver);
+        }
+        let frame = slot(t, scene.output.interval);
+        if frame > self.frame_slot {
+            self.frame_slot = frame;
+            if let Err(e) = self.write_frame(solver).and_then(|()| self.flush()) {
+                self.io_error = Some(e);
+                return ControlFlow::Break(());
+            }
+        }
+        self.progress.update(t, report.step);
+        if report.step >= scene.max_steps && !mpm_solver3d::reached(t, scene.end_time) {
+            self.stop.get_or_insert(Stop::StepLimit);
+        }
+        let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
+        if interrupted {
+            self.progress
+                .warn("interrupted: stopping after this step (3D runs write no checkpoint)");
+        }
+        if self.stop.is_some() || interrupted || self.stop_after.is_some_and(|s| t >= s) {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}

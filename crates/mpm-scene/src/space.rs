@@ -1,0 +1,201 @@
+//! A validated 3D scene ([`SpaceScene`], from a file with `[grid] dimension = 3`) and the one
+//! place where its run-time choices become types ([`dispatch_space`]): the model of the
+//! materials × the shape functions on the regular 3D grid (`mpm-grid3d`), for the 3D build of
+//! the solver (`mpm-solver3d`).
+
+use mpm_grid3d::{RegularGrid, RegularShape, ShapeFunctions, ShapeJob, with_regular_shape};
+use mpm_solver3d::{NewParticle, Particles, SolverConfig, Stress, Vector};
+
+use crate::error::SceneError;
+use crate::file::{ShapeFunctionKind, SpaceFile, VtkField, VtkFormat};
+use crate::materials::{ModelJob, SceneModel};
+use crate::scene::{EnergyAlarm, MaterialsBuilt, StopAtRest, Warning};
+
+/// A validated 3D scene, ready to run.
+#[derive(Clone, Debug)]
+pub struct SpaceScene {
+    pub(crate) origin: String,
+    pub(crate) text: String,
+    pub(crate) file: SpaceFile,
+    /// the grid.
+    pub grid: RegularGrid,
+    /// the shape functions.
+    pub shape_function: ShapeFunctionKind,
+    /// particles per cell along each axis that uGIMP's particle size follows (the largest of
+    /// the bodies').
+    pub gimp_ppc: usize,
+    /// the materials the bodies use, in index order.
+    pub materials: MaterialsBuilt,
+    /// their names, in index order.
+    pub material_names: Vec<String>,
+    /// the particles, bodies in file order.
+    pub seeds: Vec<SpaceSeed>,
+    /// the 3D solver's settings.
+    pub config: SolverConfig,
+    /// simulated end time (s).
+    pub end_time: f64,
+    /// the time step of the first step (s).
+    pub initial_dt: f64,
+    /// most steps the run may take.
+    pub max_steps: u64,
+    /// the energy alarm.
+    pub alarm: EnergyAlarm,
+    /// when the run ends early because the material has come to rest.
+    pub stop_at_rest: Option<StopAtRest>,
+    /// what the run writes.
+    pub output: SpaceOutput,
+    /// the direction the runout measures follow: the horizontal part of gravity, or +x when
+    /// gravity is vertical (unit, in the x–z plane).
+    pub runout_direction: Vector,
+    /// the plausibility warnings, less the silenced ones.
+    pub warnings: Vec<Warning>,
+}
+
+/// What a 3D run writes.
+#[derive(Clone, Debug)]
+pub struct SpaceOutput {
+    /// simulated time between particle frames (s).
+    pub interval: f64,
+    /// simulated time between rows of the CSV series (s).
+    pub series_interval: f64,
+    /// whether frames are written.
+    pub vtk: bool,
+    /// how frames store their arrays.
+    pub vtk_format: VtkFormat,
+    /// the point-data arrays of a frame.
+    pub fields: Vec<VtkField>,
+    /// whether PNG plots are drawn at the end.
+    pub plots: bool,
+}
+
+/// One 3D material point before the constitutive state is attached.
+#[derive(Clone, Copy, Debug)]
+pub struct SpaceSeed {
+    /// position (m).
+    pub position: Vector,
+    /// initial velocity (m/s).
+    pub velocity: Vector,
+    /// volume (m³).
+    pub volume: f64,
+    /// initial density (kg/m³).
+    pub density: f64,
+    /// material index.
+    pub material: u16,
+    /// body index (file order).
+    pub body: u16,
+}
+
+impl SpaceScene {
+    /// where the text came from.
+    pub fn origin(&self) -> &str {
+        &self.origin
+    }
+
+    /// the scene's text.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// the parsed file.
+    pub fn file(&self) -> &SpaceFile {
+        &self.file
+    }
+
+    /// the scene's title, if it has one.
+    pub fn title(&self) -> Option<&str> {
+        self.file.title.as_deref()
+    }
+
+    /// number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.seeds.len()
+    }
+}
+
+/// Work generic over the model and the 3D shape functions.
+pub trait SpaceJob {
+    /// what the job returns.
+    type Output;
+    /// runs with concrete types.
+    fn run<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        self,
+        scene: &SpaceScene,
+        shape: S,
+        materials: Vec<M>,
+    ) -> Self::Output;
+}
+
+/// Builds the scene's shape functions and materials and runs `job` with them.
+pub fn dispatch_space<J: SpaceJob>(scene: &SpaceScene, job: J) -> Result<J::Output, SceneError> {
+    struct WithModel<'a, J, M> {
+        job: J,
+        scene: &'a SpaceScene,
+        materials: Vec<M>,
+    }
+    impl<J: SpaceJob, M: SceneModel> ShapeJob for WithModel<'_, J, M> {
+        type Output = J::Output;
+        fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> J::Output {
+            self.job.run(self.scene, shape, self.materials)
+        }
+    }
+    struct WithScene<'a, J> {
+        job: J,
+        scene: &'a SpaceScene,
+    }
+    impl<J: SpaceJob> ModelJob for WithScene<'_, J> {
+        type Output = Result<J::Output, SceneError>;
+        fn run<M: SceneModel>(self, materials: Vec<M>) -> Self::Output {
+            let scene = self.scene;
+            let kind = match scene.shape_function {
+                ShapeFunctionKind::Bilinear => RegularShape::Bilinear,
+                ShapeFunctionKind::Gimp => RegularShape::Gimp,
+                ShapeFunctionKind::Bspline => RegularShape::BSpline,
+            };
+            let job = WithModel { job: self.job, scene, materials };
+            with_regular_shape(kind, scene.grid, scene.gimp_ppc, job).map_err(|e| SceneError {
+                origin: scene.origin.clone(),
+                line: None,
+                column: None,
+                path: "solver.shape_function".into(),
+                value: Some(format!("\"{}\"", scene.shape_function.name())),
+                problem: e.to_string(),
+                admissible: "particles_per_cell ≥ 1".into(),
+                fix: "check particles_per_cell".into(),
+            })
+        }
+    }
+    scene.materials.run(WithScene { job, scene })
+}
+
+/// The scene's particles with each material's initial state.
+pub fn space_particles<M: SceneModel>(seeds: &[SpaceSeed], materials: &[M]) -> Particles<M::State> {
+    let mut p = Particles::with_capacity(seeds.len());
+    for s in seeds {
+        let state =
+            materials.get(usize::from(s.material)).map(|m| m.initial_state()).unwrap_or_default();
+        p.push(NewParticle {
+            position: s.position,
+            velocity: s.velocity,
+            volume: s.volume,
+            density: s.density,
+            stress: Stress::ZERO,
+            state,
+            material: s.material,
+            body: s.body,
+        });
+    }
+    p
+}
+
+/// The dimension a scene text declares (`[grid] dimension`, default 2), read without validating
+/// anything else: front ends route a file to [`crate::load_scene_str`] or
+/// [`crate::load_space_str`] by it. A text that is not TOML, or whose dimension is not an
+/// integer, reads as 2 (the 2D loader then reports what is wrong, located).
+pub fn declared_dimension(text: &str) -> i64 {
+    let Ok(table) = text.parse::<toml::Table>() else { return 2 };
+    table
+        .get("grid")
+        .and_then(|g| g.get("dimension"))
+        .and_then(toml::Value::as_integer)
+        .unwrap_or(2)
+}

@@ -1,0 +1,609 @@
+//! From a 3D scene's text (`[grid] dimension = 3`) to a [`SpaceScene`]: the grid, the bodies
+//! (boxes, cylinders, prisms), the six faces and walls as planes, and the solver settings; the
+//! materials and most of `[solver]` are checked by the 2D modules. Every refusal names its
+//! field, line and column, as in 2D.
+
+use glam::DVec2;
+use mpm_contact3d::{Friction, Wall};
+use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid};
+use mpm_solver3d::generate::{self, Shape};
+// the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
+// build's), converted below
+use mpm_solver3d::{
+    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep,
+    Transfer, Vector,
+};
+
+use super::{Ctx, boundaries, finite_pos, materials, num, serde_error, solver};
+use crate::error::SceneError;
+use crate::file::{
+    Axis, BoundarySpec, GridKind, ShapeFunctionKind, SpaceBodySpec, SpaceFile, SpaceShapeKind,
+    VtkField,
+};
+use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
+use crate::materials::MaterialsBuilt;
+use crate::source::SourceMap;
+use crate::space::{SpaceOutput, SpaceScene, SpaceSeed};
+
+fn triple(p: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
+}
+
+/// Parses and validates a 3D scene; `origin` names the text in messages.
+pub fn load_space_str(text: &str, origin: &str) -> Result<SpaceScene, SceneError> {
+    let map = SourceMap::new(text);
+    let ctx = Ctx { origin, map: &map, dir: None };
+    let file: SpaceFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
+    resolve(&ctx, file, text)
+}
+
+fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneError> {
+    let settings = solver::settings(ctx, &f.solver)?;
+    let gravity = gravity(ctx, &f)?;
+    let grid = grid(ctx, &f)?;
+    let shape_function = f
+        .solver
+        .shape_function
+        .or(settings.preset.map(|p| p.shape_function))
+        .unwrap_or(ShapeFunctionKind::Bilinear);
+    let built = materials::build(ctx, &f.materials)?;
+    if f.bodies.is_empty() || f.bodies.len() > MAX_BODIES {
+        return Err(ctx.err(
+            "bodies",
+            Some(f.bodies.len().to_string()),
+            "a scene has at least one body",
+            format!("1 to {MAX_BODIES} [[bodies]] tables"),
+            "add a [[bodies]] table with a material and a shape",
+        ));
+    }
+    let names: Vec<&str> = f.bodies.iter().map(|b| b.material.as_str()).collect();
+    let (materials, used) = materials::select(ctx, &f.materials, &names, &built)?;
+    let (seeds, gimp_ppc) = seeds(ctx, &f, &grid, &used)?;
+    let config = config(ctx, &f, &settings, gravity, &materials)?;
+    let initial_dt = first_dt(ctx, &f, &config, &grid, &materials, &seeds, settings.max_steps)?;
+    let output = output(ctx, &f)?;
+    let horizontal = Vector::new(gravity.x, 0.0, gravity.z);
+    let runout_direction = horizontal.try_normalize().unwrap_or(Vector::X);
+    Ok(SpaceScene {
+        origin: ctx.origin.to_string(),
+        text: text.to_string(),
+        grid,
+        shape_function,
+        gimp_ppc,
+        materials,
+        material_names: used.iter().map(|n| n.to_string()).collect(),
+        seeds,
+        config,
+        end_time: f.solver.end_time,
+        initial_dt,
+        max_steps: settings.max_steps,
+        alarm: settings.alarm,
+        stop_at_rest: settings.stop_at_rest,
+        output,
+        runout_direction,
+        warnings: Vec::new(),
+        file: f,
+    })
+}
+
+/// `[solver] gravity` of a 3D scene: three finite components, default (0, −g, 0).
+fn gravity(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Vector, SceneError> {
+    match f.solver.gravity.as_deref() {
+        None => Ok(Vector::NEG_Y * STANDARD_GRAVITY),
+        Some(&[gx, gy, gz]) if gx.is_finite() && gy.is_finite() && gz.is_finite() => {
+            Ok(Vector::new(gx, gy, gz))
+        }
+        Some(g) => Err(ctx.err(
+            "solver.gravity",
+            Some(format!("{g:?}")),
+            if g.len() == 3 {
+                "gravity is not finite"
+            } else {
+                "a 3D scene's gravity has 3 components"
+            },
+            "[gx, gy, gz], finite (m/s²)",
+            "use `gravity = [0.0, -9.81, 0.0]`",
+        )),
+    }
+}
+
+/// `[grid]`: regular, cubic cells, a positive count along each axis.
+fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError> {
+    let g = &f.grid;
+    if g.kind != GridKind::Regular {
+        return Err(ctx.err(
+            "grid.kind",
+            Some("\"terrain\"".into()),
+            "the terrain-following grid is 2D only",
+            "\"regular\" in a 3D scene",
+            "use `kind = \"regular\"` (a 3D grid over a DEM is not available yet)",
+        ));
+    }
+    if !g.origin.iter().all(|x| x.is_finite()) {
+        return Err(ctx.err(
+            "grid.origin",
+            Some(triple(g.origin)),
+            "the origin is not finite",
+            "finite coordinates (m)",
+            "give the lowest node, e.g. `origin = [0.0, 0.0, 0.0]`",
+        ));
+    }
+    let [dx, dy, dz] = g.cell;
+    if !(finite_pos(dx) && dx == dy && dx == dz) {
+        return Err(ctx.err(
+            "grid.cell",
+            Some(triple(g.cell)),
+            "3D cells are cubes of positive finite side",
+            "[h, h, h] with h > 0 (m)",
+            "give the same size along each axis, e.g. `cell = [0.1, 0.1, 0.1]`",
+        ));
+    }
+    for (a, &n) in g.cells.iter().enumerate() {
+        if !(1..=MAX_CELLS_PER_AXIS as i64).contains(&n) {
+            return Err(ctx.err(
+                "grid.cells",
+                Some(format!("{:?}", g.cells)),
+                format!("{} cells along {}", n, ["x", "y", "z"][a]),
+                format!("1 ≤ cells ≤ {MAX_CELLS_PER_AXIS} along each axis"),
+                "give the number of cells along x, y and z, e.g. `cells = [40, 20, 40]`",
+            ));
+        }
+    }
+    let cells = g.cells.map(|n| n as usize);
+    RegularGrid::new(Vector::from_array(g.origin), Vector::from_array(g.cell), cells).map_err(|e| {
+        ctx.err(
+            "grid",
+            None,
+            e.to_string(),
+            "a grid whose far corner is finite",
+            "check origin, cell and cells",
+        )
+    })
+}
+
+/// the body's shape, its fields checked against its `shape`.
+fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, SceneError> {
+    let p = |field: &str| format!("{base}.{field}");
+    let why = |shape: &str| format!("it belongs to another shape than `{shape}`");
+    let foreign = |present: &[(&str, bool)], shape: &str| -> Result<(), SceneError> {
+        match present.iter().find(|(_, here)| *here) {
+            Some((field, _)) => Err(ctx.foreign(&p(field), &why(shape))),
+            None => Ok(()),
+        }
+    };
+    let positive = |field: &str, v: Option<f64>, example: &str| -> Result<f64, SceneError> {
+        let v = v.ok_or_else(|| ctx.missing(&p(field), "this shape needs it", example))?;
+        if !finite_pos(v) {
+            return Err(ctx.range(&p(field), v, "> 0 (m)", "give a positive length in metres"));
+        }
+        Ok(v)
+    };
+    let finite = |field: &str, v: [f64; 3]| -> Result<Vector, SceneError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(Vector::from_array(v))
+        } else {
+            Err(ctx.err(&p(field), Some(triple(v)), "not finite", "finite values", "give numbers"))
+        }
+    };
+    match b.shape {
+        SpaceShapeKind::Box => {
+            foreign(
+                &[
+                    ("base", b.base.is_some()),
+                    ("direction", b.direction.is_some()),
+                    ("radius", b.radius.is_some()),
+                    ("height", b.height.is_some()),
+                    ("vertices", b.vertices.is_some()),
+                    ("axis", b.axis.is_some()),
+                    ("from", b.from.is_some()),
+                    ("to", b.to.is_some()),
+                ],
+                "box",
+            )?;
+            let min =
+                b.min.ok_or_else(|| ctx.missing(&p("min"), "a box has corners", "[0, 0, 0]"))?;
+            let max =
+                b.max.ok_or_else(|| ctx.missing(&p("max"), "a box has corners", "[1, 1, 1]"))?;
+            let (lo, hi) = (finite(&p("min"), min)?, finite(&p("max"), max)?);
+            if !hi.cmpgt(lo).all() {
+                return Err(ctx.err(
+                    &p("max"),
+                    Some(triple(max)),
+                    format!("not above `min` = {} along every axis", triple(min)),
+                    "max > min along x, y and z",
+                    "swap the corners or give the box a positive size",
+                ));
+            }
+            Ok(Shape::Box { min: lo, max: hi })
+        }
+        SpaceShapeKind::Cylinder => {
+            foreign(
+                &[
+                    ("min", b.min.is_some()),
+                    ("max", b.max.is_some()),
+                    ("vertices", b.vertices.is_some()),
+                    ("axis", b.axis.is_some()),
+                    ("from", b.from.is_some()),
+                    ("to", b.to.is_some()),
+                ],
+                "cylinder",
+            )?;
+            let base = b.base.ok_or_else(|| {
+                ctx.missing(&p("base"), "a cylinder stands on the centre of its base", "[1, 0, 1]")
+            })?;
+            let base = finite(&p("base"), base)?;
+            let direction = finite(&p("direction"), b.direction.unwrap_or([0.0, 1.0, 0.0]))?;
+            if direction.length() == 0.0 {
+                return Err(ctx.err(
+                    &p("direction"),
+                    b.direction.map(triple),
+                    "the axis has no direction",
+                    "a non-zero vector",
+                    "give the axis's direction, e.g. `direction = [0, 1, 0]` (upright)",
+                ));
+            }
+            let radius = positive("radius", b.radius, "0.5")?;
+            let height = positive("height", b.height, "1.0")?;
+            Ok(Shape::Cylinder { base, axis: direction.normalize(), radius, height })
+        }
+        SpaceShapeKind::Prism => {
+            foreign(
+                &[
+                    ("min", b.min.is_some()),
+                    ("max", b.max.is_some()),
+                    ("base", b.base.is_some()),
+                    ("direction", b.direction.is_some()),
+                    ("radius", b.radius.is_some()),
+                    ("height", b.height.is_some()),
+                ],
+                "prism",
+            )?;
+            let vertices = b.vertices.as_ref().ok_or_else(|| {
+                ctx.missing(
+                    &p("vertices"),
+                    "a prism extrudes a polygon",
+                    "[[0, 0], [1, 0], [0, 1]]",
+                )
+            })?;
+            if !(3..=MAX_VERTICES).contains(&vertices.len())
+                || !vertices.iter().flatten().all(|x| x.is_finite())
+            {
+                return Err(ctx.err(
+                    &p("vertices"),
+                    Some(format!("{} vertices", vertices.len())),
+                    "a prism's polygon has 3 or more finite vertices",
+                    format!("3 to {MAX_VERTICES} vertices [u, v] (m)"),
+                    "list the polygon's corners in order",
+                ));
+            }
+            let axis = b.axis.ok_or_else(|| {
+                ctx.missing(&p("axis"), "a prism is extruded along an axis", "\"z\"")
+            })?;
+            let from = b.from.ok_or_else(|| ctx.missing(&p("from"), "where it starts", "0.0"))?;
+            let to = b.to.ok_or_else(|| ctx.missing(&p("to"), "where it ends", "1.0"))?;
+            if !(from.is_finite() && to.is_finite() && to > from) {
+                return Err(ctx.err(
+                    &p("to"),
+                    Some(num(to)),
+                    format!("not beyond `from` = {}", num(from)),
+                    "to > from, finite (m)",
+                    "give the prism a positive length along its axis",
+                ));
+            }
+            let axis = match axis {
+                Axis::X => generate::Axis::X,
+                Axis::Y => generate::Axis::Y,
+                Axis::Z => generate::Axis::Z,
+            };
+            let vertices = vertices.iter().map(|v| DVec2::from_array(*v)).collect();
+            Ok(Shape::Prism { vertices, axis, from, to })
+        }
+    }
+}
+
+/// The particles of every body, and the particles per cell uGIMP's size follows.
+fn seeds(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    grid: &RegularGrid,
+    used: &[&str],
+) -> Result<(Vec<SpaceSeed>, usize), SceneError> {
+    let cell = grid.cell_size().x;
+    let mut seeds: Vec<SpaceSeed> = Vec::new();
+    let mut shapes: Vec<Shape> = Vec::new();
+    let mut gimp_ppc = 1;
+    for (b, body) in f.bodies.iter().enumerate() {
+        let base = format!("bodies[{b}]");
+        let shape = body_shape(ctx, &base, body)?;
+        let ppc = body.particles_per_cell.unwrap_or(2);
+        if !(1..=MAX_PARTICLES_PER_CELL).contains(&ppc) {
+            return Err(ctx.range(
+                &format!("{base}.particles_per_cell"),
+                ppc as f64,
+                &format!("1 ≤ particles_per_cell ≤ {MAX_PARTICLES_PER_CELL} (along each axis)"),
+                "use 2 (the paper's 2 × 2 per cell; 2 × 2 × 2 in 3D)",
+            ));
+        }
+        gimp_ppc = gimp_ppc.max(ppc as usize);
+        let spacing = cell / ppc as f64;
+        let (lo, hi) = shape.bounds();
+        let estimate = ((hi - lo) / spacing).element_product();
+        if !(estimate.is_finite() && seeds.len() as f64 + estimate <= MAX_PARTICLES as f64) {
+            return Err(ctx.err(
+                &base,
+                None,
+                format!("the scene would generate more than {MAX_PARTICLES} particles"),
+                format!("at most {MAX_PARTICLES} particles in a scene"),
+                "use a coarser grid or fewer particles per cell",
+            ));
+        }
+        let fill = generate::fill(&shape, spacing);
+        if fill.is_empty() {
+            return Err(ctx.err(
+                &base,
+                None,
+                format!(
+                    "the body is smaller than one particle spacing ({} m) and holds no particle",
+                    num(spacing)
+                ),
+                "a body at least one particle spacing across",
+                "enlarge the body or raise particles_per_cell",
+            ));
+        }
+        if let Some(s) = fill.iter().find(|s| grid.locate(s.position).is_err()) {
+            return Err(ctx.err(
+                &base,
+                None,
+                format!("a particle at {} lies outside the grid", s.position),
+                "bodies inside the grid",
+                "move the body, or enlarge the grid (origin, cells)",
+            ));
+        }
+        if let Some((k, s)) = fill
+            .iter()
+            .find_map(|s| shapes.iter().position(|o| o.contains(s.position)).map(|k| (k, s)))
+        {
+            return Err(ctx.err(
+                &base,
+                None,
+                format!("it overlaps bodies[{k}] (a particle at {})", s.position),
+                "bodies that do not overlap",
+                "move or shrink one of the two",
+            ));
+        }
+        let velocity = body.velocity.unwrap_or([0.0; 3]);
+        if !velocity.iter().all(|v| v.is_finite()) {
+            return Err(ctx.err(
+                &format!("{base}.velocity"),
+                Some(triple(velocity)),
+                "not finite",
+                "finite components (m/s)",
+                "give the initial velocity, e.g. `velocity = [0, 0, 0]`",
+            ));
+        }
+        let material = used.iter().position(|n| *n == body.material).unwrap_or(0);
+        let density =
+            f.materials.get(&body.material).and_then(|m| m.number("density")).unwrap_or(1.0);
+        seeds.extend(fill.iter().map(|s| SpaceSeed {
+            position: s.position,
+            velocity: Vector::from_array(velocity),
+            volume: s.volume,
+            density,
+            material: material as u16,
+            body: b as u16,
+        }));
+        shapes.push(shape);
+    }
+    Ok((seeds, gimp_ppc))
+}
+
+/// the friction law of a face, if the scene names one.
+fn law(
+    ctx: &Ctx<'_>,
+    path: &str,
+    spec: Option<BoundarySpec>,
+) -> Result<Option<Friction>, SceneError> {
+    spec.map(|s| boundaries::friction_3d(ctx, path, s)).transpose()
+}
+
+/// The 3D solver's settings; where the scene is silent the materials' model decides, as in 2D.
+fn config(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    settings: &solver::Settings,
+    gravity: Vector,
+    materials: &MaterialsBuilt,
+) -> Result<SolverConfig, SceneError> {
+    let b = &f.boundaries;
+    let boundaries = Boundaries {
+        ground: law(ctx, "boundaries.ground", b.ground)?,
+        left_wall: law(ctx, "boundaries.left_wall", b.left_wall)?,
+        right_wall: law(ctx, "boundaries.right_wall", b.right_wall)?,
+        back_wall: law(ctx, "boundaries.back_wall", b.back_wall)?,
+        front_wall: law(ctx, "boundaries.front_wall", b.front_wall)?,
+    };
+    let periodic = if b.periodic {
+        if b.left_wall.is_some() || b.right_wall.is_some() {
+            return Err(ctx.err(
+                "boundaries.periodic",
+                Some("true".into()),
+                "periodic sides cannot also be walls",
+                "periodic = true without left_wall and right_wall",
+                "remove `left_wall` and `right_wall`, or `periodic`",
+            ));
+        }
+        let [nx, _, _] = f.grid.cells;
+        Some(Periodic {
+            x_min: f.grid.origin[0],
+            length: nx as f64 * f.grid.cell[0],
+            columns: nx as u32,
+        })
+    } else {
+        None
+    };
+    let mut walls = Vec::new();
+    for (k, w) in b.walls.iter().enumerate() {
+        let path = format!("boundaries.walls[{k}]");
+        let friction = boundaries::friction_3d(ctx, &format!("{path}.law"), w.law)?;
+        let normal = Vector::from_array(w.normal);
+        let wall = normal
+            .try_normalize()
+            .and_then(|n| Wall::plane(Vector::from_array(w.point), n, friction).ok())
+            .ok_or_else(|| {
+                ctx.err(
+                    &path,
+                    Some(format!("point {}, normal {}", triple(w.point), triple(w.normal))),
+                    "a wall is a plane through a finite point with a non-zero normal",
+                    "finite `point`, non-zero finite `normal` (into the material)",
+                    "give the plane's point and the direction its material lies in",
+                )
+            })?;
+        walls.push(wall);
+    }
+    let s = &f.solver;
+    let transfer = match s.transfer.unwrap_or_default() {
+        mpm_solver::Transfer::Flip => Transfer::Flip,
+        mpm_solver::Transfer::Apic => Transfer::Apic,
+    };
+    let flip = transfer == Transfer::Flip;
+    let config = SolverConfig {
+        scheme: match settings.scheme {
+            mpm_solver::Scheme::Usl => Scheme::Usl,
+            mpm_solver::Scheme::Musl => Scheme::Musl,
+            mpm_solver::Scheme::Usf => Scheme::Usf,
+            mpm_solver::Scheme::Usavg => Scheme::Usavg,
+        },
+        time_step: match settings.time_step {
+            mpm_solver::TimeStep::Courant(c) => TimeStep::Courant(c),
+            mpm_solver::TimeStep::Fixed(dt) => TimeStep::Fixed(dt),
+        },
+        gravity,
+        boundaries,
+        periodic,
+        walls,
+        small_mass_ratio: settings.small_mass_ratio,
+        objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
+        gravity_ramp: settings.gravity_ramp,
+        transfer,
+        pic_fraction: s.pic_fraction.unwrap_or(if flip { materials.pic_fraction() } else { 0.0 }),
+        separation_density: s.separation_density.unwrap_or(if flip {
+            materials.separation_density()
+        } else {
+            0.0
+        }),
+        contact: match s.contact.unwrap_or_default() {
+            mpm_solver::Contact::Surface => Contact::Surface,
+            mpm_solver::Contact::Node => Contact::Node,
+        },
+        mass: match s.mass.unwrap_or_default() {
+            mpm_solver::MassMatrix::Lumped => MassMatrix::Lumped,
+            mpm_solver::MassMatrix::Consistent => MassMatrix::Consistent,
+        },
+    };
+    config.validate().map_err(|e| {
+        let (path, fix) = match &e {
+            mpm_solver3d::SolverError::Incompatible { setting, .. } => {
+                (format!("solver.{setting}"), "use an admissible combination")
+            }
+            mpm_solver3d::SolverError::InvalidSetting { name, .. } => {
+                (format!("solver.{name}"), "use an admissible value")
+            }
+            _ => ("solver".to_string(), "check the [solver] table"),
+        };
+        ctx.err(&path, None, e.to_string(), String::new(), fix)
+    })?;
+    Ok(config)
+}
+
+/// The Δt of the first step by the solver's rule, and the refusal of a scene that cannot end
+/// within `max_steps`.
+fn first_dt(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    config: &SolverConfig,
+    grid: &RegularGrid,
+    materials: &MaterialsBuilt,
+    seeds: &[SpaceSeed],
+    max_steps: u64,
+) -> Result<f64, SceneError> {
+    let moduli = materials.p_wave_moduli();
+    let signal = seeds
+        .iter()
+        .map(|s| (moduli[usize::from(s.material)] / s.density).sqrt() + s.velocity.length())
+        .fold(0.0, f64::max);
+    let v_max = seeds.iter().map(|s| s.velocity.length()).fold(0.0, f64::max);
+    let min_cell = grid.min_cell_size();
+    let dt =
+        mpm_solver3d::stable_dt(config.time_step, min_cell, config.gravity.length(), signal, v_max)
+            .map_err(|e| {
+                let path = if matches!(config.time_step, TimeStep::Fixed(_)) {
+                    "solver.dt"
+                } else {
+                    "solver"
+                };
+                ctx.err(
+                    path,
+                    None,
+                    format!("the first time step is not stable: {e:?}"),
+                    "a Courant number ≤ 1 at t = 0",
+                    "replace `dt` by `courant = 0.1`",
+                )
+            })?;
+    let steps = (f.solver.end_time / dt).ceil();
+    if steps.is_nan() || steps > max_steps as f64 {
+        return Err(ctx.err(
+            "solver.end_time",
+            Some(num(f.solver.end_time)),
+            format!(
+                "the run would take {steps:.0} steps or more (initial Δt {} s), above max_steps \
+                 = {max_steps}",
+                num(dt)
+            ),
+            format!("end_time / Δt ≤ max_steps = {max_steps}"),
+            "shorten end_time, coarsen the grid, or raise `[solver] max_steps`",
+        ));
+    }
+    Ok(dt)
+}
+
+/// `[output]` of a 3D scene: frames and series; the 2D-only outputs are refused.
+fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
+    let o = &f.output;
+    let refused = [
+        ("output.probes", o.probes.is_some()),
+        ("output.reference", o.reference.is_some()),
+        ("output.envelope", o.envelope == Some(true)),
+        ("output.observed", o.observed.is_some()),
+        ("output.checkpoint_interval", o.checkpoint_interval.is_some()),
+    ];
+    if let Some((path, _)) = refused.iter().find(|(_, here)| *here) {
+        return Err(ctx.err(
+            path,
+            None,
+            "this output is not available in 3D scenes yet",
+            "interval, series_interval, fields, vtk, vtk_format, plots",
+            "remove it (3D runs write frames, energy.csv, runout.csv and summary.json)",
+        ));
+    }
+    let end = f.solver.end_time;
+    let interval = o.interval.unwrap_or(end / 50.0);
+    let series_interval = o.series_interval.unwrap_or(interval.min(end / 200.0));
+    for (path, v) in [("output.interval", interval), ("output.series_interval", series_interval)] {
+        if !(finite_pos(v) && v >= end * 1e-7) {
+            return Err(ctx.range(
+                path,
+                v,
+                "end_time × 1e-7 ≤ interval (s)",
+                "give the simulated time between outputs in seconds",
+            ));
+        }
+    }
+    Ok(SpaceOutput {
+        interval,
+        series_interval,
+        vtk: o.vtk.unwrap_or(true),
+        vtk_format: o.vtk_format.unwrap_or_default(),
+        fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
+        plots: o.plots.unwrap_or(true),
+    })
+}
