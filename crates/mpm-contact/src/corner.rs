@@ -78,7 +78,8 @@ impl Edge {
         let (na, nb) = (a.normal(), b.normal());
         let e = na.cross(nb);
         let length = e.length();
-        if !(length > 1e-9) {
+        // (a NaN length is refused too)
+        if length.is_nan() || length <= 1e-9 {
             return None;
         }
         let e = e / length;

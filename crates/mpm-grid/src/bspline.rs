@@ -97,7 +97,7 @@ impl ShapeFunctions<WIDE> for QuadraticBSpline {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

@@ -149,7 +149,7 @@ fn natural_gradients(xi: f64, eta: f64) -> [(f64, f64); 4] {
     ]
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

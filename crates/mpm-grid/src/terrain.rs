@@ -587,7 +587,7 @@ fn row_error(p: Vector, t: f64, ground_y: f64) -> LocateError {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

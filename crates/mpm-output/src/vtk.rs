@@ -177,6 +177,10 @@ fn ascii_array<T: Scalar>(
 pub trait FrameData: Sync {
     /// number of particles.
     fn len(&self) -> usize;
+    /// whether there is no particle.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     /// position (m).
     fn position(&self, i: usize) -> [f64; 3];
     /// velocity (m/s).

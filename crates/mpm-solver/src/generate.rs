@@ -171,7 +171,7 @@ fn lattice(
 
 pub use crate::polygon::inside_polygon;
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::*;
 

@@ -74,7 +74,7 @@ use crate::stages::grid::held_planes;
 
 mod newton;
 mod settle;
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests;
 
 pub use settle::SettleReport;

@@ -182,7 +182,7 @@ fn check_finite(
     Err(SolverError::NonFinite { step, particle: q, position: x, field })
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_grid::{Bilinear, RegularGrid};

@@ -413,7 +413,7 @@ pub(crate) fn store<F>(node: NodeId, factors: F, first: &mut NodeId, slot: &mut 
     changed
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;

@@ -517,7 +517,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     pub(crate) fn book_reactions(&mut self, _dt: Real) {}
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use super::band_place;
 

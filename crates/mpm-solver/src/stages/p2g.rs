@@ -344,7 +344,7 @@ fn in_plane(s: &Stress, g: Vector) -> Vector {
     )
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_grid::{Gimp, RegularGrid, ShapeFunctions};

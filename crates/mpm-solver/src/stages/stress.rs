@@ -297,7 +297,7 @@ fn cos_sin(theta: Real) -> (Real, Real) {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(feature = "dim3")))]
 mod tests {
     use mpm_constitutive::{LinearElastic, PlaneTensor};
     use mpm_grid::{Bilinear, RegularGrid};
