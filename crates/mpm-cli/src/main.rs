@@ -172,8 +172,7 @@ fn main() -> ExitCode {
             let signals = signals();
             let name = scene.unwrap_or_else(|| DEFAULT_SCENE.to_string());
             let scene = match load_any(&name) {
-                Ok(AnyScene::Plane(s)) => s,
-                Ok(AnyScene::Space(s)) => return run_space(&s, &name, out, threads, quiet, force),
+                Ok(s) => s,
                 Err(e) => return scene_failure(&e),
             };
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(stem(&name)));
@@ -185,16 +184,25 @@ fn main() -> ExitCode {
                 stop_after: None,
                 interrupt: Some(signals.interrupt.clone()),
             };
+            let (origin, what, end) = match &scene {
+                AnyScene::Plane(s) => (s.origin(), "", s.end_time()),
+                AnyScene::Space(s) => (s.origin(), "3D, ", s.end_time),
+            };
             if !quiet {
+                let particles = match &scene {
+                    AnyScene::Plane(s) => s.particle_count(),
+                    AnyScene::Space(s) => s.particle_count(),
+                };
                 eprintln!(
-                    "mpm: running {} ({} particles, end time {} s) into {}",
-                    scene.origin(),
-                    scene.particle_count(),
-                    scene.end_time(),
+                    "mpm: running {origin} ({what}{particles} particles, end time {end} s) into {}",
                     out.display()
                 );
             }
-            finish(mpm_run::run_scene(&scene, &opts), &out, quiet, &signals)
+            let result = match &scene {
+                AnyScene::Plane(s) => mpm_run::run_scene(s, &opts),
+                AnyScene::Space(s) => mpm_run::run_space_scene(s, &opts),
+            };
+            finish(result, &out, quiet, &signals)
         }
         Command::Resume { dir, threads, quiet } => {
             let signals = signals();
@@ -305,37 +313,6 @@ fn scene_materials(
             })
         })
         .collect()
-}
-
-/// `mpm run` of a 3D scene.
-fn run_space(
-    scene: &SpaceScene,
-    name: &str,
-    out: Option<PathBuf>,
-    threads: Option<usize>,
-    quiet: bool,
-    force: bool,
-) -> ExitCode {
-    let signals = signals();
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(stem(name)));
-    let opts = RunOptions {
-        out_dir: Some(out.clone()),
-        threads,
-        progress: progress::Terminal::sink(quiet),
-        force,
-        stop_after: None,
-        interrupt: Some(signals.interrupt.clone()),
-    };
-    if !quiet {
-        eprintln!(
-            "mpm: running {} (3D, {} particles, end time {} s) into {}",
-            scene.origin(),
-            scene.particle_count(),
-            scene.end_time,
-            out.display()
-        );
-    }
-    finish(mpm_run::run_space_scene(scene, &opts), &out, quiet, &signals)
 }
 
 /// `mpm check` of a 3D scene.
@@ -514,16 +491,13 @@ fn section(
     ExitCode::SUCCESS
 }
 
-/// A scene file path (2D or 3D), or an embedded scene's name when no such file exists.
+/// A scene file path (2D or 3D, by its `[grid] dimension`), or an embedded scene's name when no
+/// such file exists.
 fn load_any(name: &str) -> Result<AnyScene, Box<SceneError>> {
-    let path = Path::new(name);
-    if !path.is_file() {
-        if let Some(text) = mpm_run::embedded_scene(name) {
-            let scene = mpm_run::load_scene_str(text, &format!("embedded:{name}"));
-            return scene.map(|s| AnyScene::Plane(Box::new(s))).map_err(Box::new);
-        }
+    if Path::new(name).is_file() {
+        return mpm_run::load_any_scene_file(Path::new(name)).map_err(Box::new);
     }
-    mpm_run::load_any_scene_file(path).map_err(Box::new)
+    load(name).map(|s| AnyScene::Plane(Box::new(s)))
 }
 
 /// A scene file path, or an embedded scene's name when no such file exists.

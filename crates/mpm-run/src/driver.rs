@@ -230,10 +230,10 @@ struct Flushed {
 
 /// A slot time counts as reached when the clock is within this fraction of the interval of it
 /// (round-off of summed steps, never a physical time difference).
-const SLOT_SLACK: f64 = 1e-9;
+pub(crate) const SLOT_SLACK: f64 = 1e-9;
 
 /// index of the last slot k·interval reached at time t.
-fn slot(t: f64, interval: f64) -> u64 {
+pub(crate) fn slot(t: f64, interval: f64) -> u64 {
     (t / interval + SLOT_SLACK).floor().max(0.0) as u64
 }
 

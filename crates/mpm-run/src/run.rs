@@ -68,7 +68,7 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
             let mut active = std::collections::HashSet::new();
             for (i, seed) in r.seeds.iter().enumerate() {
                 let stencil = shape.stencil(seed.position).map_err(|e| {
-                    setup_error(scene, &format!("particle {i} at {}: {e}", seed.position))
+                    setup_error(scene.origin(), &format!("particle {i} at {}: {e}", seed.position))
                 })?;
                 active.extend(stencil.nodes);
             }
@@ -114,9 +114,10 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
     dispatch::dispatch(scene, CheckJob)?
 }
 
-fn setup_error(scene: &Scene, message: &str) -> RunError {
+/// the solver's refusal of a scene (from `origin`, a path or `embedded:NAME`) at set-up.
+pub(crate) fn setup_error(origin: &str, message: &str) -> RunError {
     RunError::from(SceneError {
-        origin: scene.origin().to_string(),
+        origin: origin.to_string(),
         line: None,
         column: None,
         path: "bodies".into(),
@@ -329,7 +330,7 @@ impl Job for RunJob<'_> {
             None => {
                 let particles = dispatch::particles(&r.seeds, &materials);
                 let s = Solver::new(shape, materials, particles, r.config.clone())
-                    .map_err(|e| setup_error(scene, &e.to_string()))?;
+                    .map_err(|e| setup_error(scene.origin(), &e.to_string()))?;
                 (s, History { dt_min: f64::INFINITY, ..History::default() }, true)
             }
             Some((state, history)) => {
@@ -341,7 +342,7 @@ impl Job for RunJob<'_> {
                     }));
                 };
                 let s = Solver::from_checkpoint(shape, materials, r.config.clone(), c)
-                    .map_err(|e| setup_error(scene, &e.to_string()))?;
+                    .map_err(|e| setup_error(scene.origin(), &e.to_string()))?;
                 (s, history, false)
             }
         };

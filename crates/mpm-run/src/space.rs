@@ -27,13 +27,14 @@ use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
-use mpm_scene::{SceneError, SpaceScene, dispatch_space, fnv1a};
+use mpm_scene::{SpaceScene, dispatch_space, fnv1a};
 use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport};
 
+use crate::driver::slot;
 use crate::error::RunError;
 use crate::options::RunOptions;
 use crate::progress::ProgressSink;
-use crate::run::{CheckReport, with_pool};
+use crate::run::{CheckReport, setup_error, with_pool};
 
 /// the 3D ledger as the summary's (the same fields; J, not J/m).
 fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
@@ -48,19 +49,6 @@ fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
         external_work: l.external_work,
         residual: l.residual,
     }
-}
-
-fn refused(scene: &SpaceScene, message: &str) -> RunError {
-    RunError::from(SceneError {
-        origin: scene.origin().to_string(),
-        line: None,
-        column: None,
-        path: "bodies".into(),
-        value: None,
-        problem: format!("the solver refused the scene: {message}"),
-        admissible: String::new(),
-        fix: "check the bodies' positions and materials".into(),
-    })
 }
 
 /// Validates a 3D scene fully without stepping: every particle located, and particles, active
@@ -78,7 +66,7 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
             let mut active = std::collections::HashSet::new();
             for (i, seed) in scene.seeds.iter().enumerate() {
                 let stencil = shape.stencil(seed.position).map_err(|e| {
-                    refused(scene, &format!("particle {i} at {}: {e}", seed.position))
+                    setup_error(scene.origin(), &format!("particle {i} at {}: {e}", seed.position))
                 })?;
                 active.extend(stencil.nodes);
             }
@@ -142,7 +130,7 @@ impl SpaceJob for SpaceRun<'_> {
     ) -> Self::Output {
         let particles = space_particles(&scene.seeds, &materials);
         let mut solver = Solver::new(shape, materials, particles, scene.config.clone())
-            .map_err(|e| refused(scene, &e.to_string()))?;
+            .map_err(|e| setup_error(scene.origin(), &e.to_string()))?;
         let mut d = SpaceDriver::begin(scene, self.opts, &solver);
         d.progress.start(scene.end_time, 0.0, 0);
         d.record(&solver);
@@ -190,13 +178,6 @@ enum Stop {
     EnergyAlarm,
     StepLimit,
     AtRest,
-}
-
-/// A slot time counts as reached within this fraction of the interval (as in 2D).
-const SLOT_SLACK: f64 = 1e-9;
-
-fn slot(t: f64, interval: f64) -> u64 {
-    (t / interval + SLOT_SLACK).floor().max(0.0) as u64
 }
 
 struct SpaceDriver<'a> {

@@ -113,25 +113,10 @@ pub(super) fn seeds(
             });
         }
         if fill.is_empty() {
-            return Err(ctx.err(
-                &base,
-                None,
-                format!(
-                    "the body is smaller than one particle spacing ({} m) and holds no particle",
-                    num(spacing)
-                ),
-                "a body at least one particle spacing wide and thick",
-                "enlarge the body or raise particles_per_cell",
-            ));
+            return Err(no_particle(ctx, &base, spacing));
         }
         if seeds.len() + fill.len() > MAX_PARTICLES {
-            return Err(ctx.err(
-                &base,
-                None,
-                format!("the scene would generate more than {MAX_PARTICLES} particles"),
-                format!("at most {MAX_PARTICLES} particles in a scene"),
-                "use a coarser grid or fewer particles per cell",
-            ));
+            return Err(too_many(ctx, &base));
         }
         let m_index = used.iter().position(|n| *n == body.material).unwrap_or(0);
         let density =
@@ -751,5 +736,30 @@ fn outside_error(
         } else {
             "move or shrink the body, or enlarge the grid (more rows, a longer profile or more cells)"
         },
+    )
+}
+
+/// a body too small to hold a particle at `spacing` (m), located at `base` (2D and 3D).
+pub(super) fn no_particle(ctx: &Ctx<'_>, base: &str, spacing: f64) -> SceneError {
+    ctx.err(
+        base,
+        None,
+        format!(
+            "the body is smaller than one particle spacing ({} m) and holds no particle",
+            num(spacing)
+        ),
+        "a body at least one particle spacing across",
+        "enlarge the body or raise particles_per_cell",
+    )
+}
+
+/// a body that would take the scene beyond [`MAX_PARTICLES`], located at `base` (2D and 3D).
+pub(super) fn too_many(ctx: &Ctx<'_>, base: &str) -> SceneError {
+    ctx.err(
+        base,
+        None,
+        format!("the scene would generate more than {MAX_PARTICLES} particles"),
+        format!("at most {MAX_PARTICLES} particles in a scene"),
+        "use a coarser grid or fewer particles per cell",
     )
 }

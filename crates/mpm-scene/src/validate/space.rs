@@ -14,7 +14,7 @@ use mpm_solver3d::{
     Transfer, Vector,
 };
 
-use super::{Ctx, boundaries, finite_pos, materials, num, serde_error, solver};
+use super::{Ctx, bodies, boundaries, finite_pos, materials, num, serde_error, solver};
 use crate::error::SceneError;
 use crate::file::{
     Axis, BoundarySpec, GridKind, ShapeFunctionKind, SpaceBodySpec, SpaceFile, SpaceShapeKind,
@@ -329,26 +329,11 @@ fn seeds(
         let (lo, hi) = shape.bounds();
         let estimate = ((hi - lo) / spacing).element_product();
         if !(estimate.is_finite() && seeds.len() as f64 + estimate <= MAX_PARTICLES as f64) {
-            return Err(ctx.err(
-                &base,
-                None,
-                format!("the scene would generate more than {MAX_PARTICLES} particles"),
-                format!("at most {MAX_PARTICLES} particles in a scene"),
-                "use a coarser grid or fewer particles per cell",
-            ));
+            return Err(bodies::too_many(ctx, &base));
         }
         let fill = generate::fill(&shape, spacing);
         if fill.is_empty() {
-            return Err(ctx.err(
-                &base,
-                None,
-                format!(
-                    "the body is smaller than one particle spacing ({} m) and holds no particle",
-                    num(spacing)
-                ),
-                "a body at least one particle spacing across",
-                "enlarge the body or raise particles_per_cell",
-            ));
+            return Err(bodies::no_particle(ctx, &base, spacing));
         }
         if let Some(s) = fill.iter().find(|s| grid.locate(s.position).is_err()) {
             return Err(ctx.err(
