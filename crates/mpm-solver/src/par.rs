@@ -99,17 +99,34 @@ pub(crate) fn counting_sort<const K: usize>(
 /// Σ_{i<n} f(i), bit-identical for every thread count.
 pub fn sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
     let chunk = chunk_len(n);
-    let chunks: Vec<f64> = (0..n.div_ceil(chunk))
-        .into_par_iter()
-        .map(|c| {
-            let mut s = 0.0;
-            for i in c * chunk..((c + 1) * chunk).min(n) {
-                s += f(i);
-            }
-            s
-        })
-        .collect();
+    let chunk_sum = |c: usize| {
+        let mut s = 0.0;
+        for i in c * chunk..((c + 1) * chunk).min(n) {
+            s += f(i);
+        }
+        s
+    };
+    let chunks = map_chunks(n.div_ceil(chunk), &chunk_sum);
     chunks.iter().sum()
+}
+
+/// `f(c)` for every chunk `c < chunks`, in parallel, in chunk order. The chunk's work reaches
+/// rayon through one indirect call per chunk (never per item), so rayon's machinery is compiled
+/// once per result type instead of once per loop and per solver type: the loops over chunks of
+/// every model and shape function share it (compile time, not run time, is what this saves).
+pub(crate) fn map_chunks<T: Send>(chunks: usize, f: &(dyn Fn(usize) -> T + Sync)) -> Vec<T> {
+    (0..chunks).into_par_iter().map(f).collect()
+}
+
+/// `f(c)` for every chunk `c < chunks`, in parallel, merged by `merge` (associative, with
+/// `identity` its neutral element); as [`map_chunks`], one copy of rayon's machinery per `T`.
+pub(crate) fn reduce_chunks<T: Send + Copy + Sync>(
+    chunks: usize,
+    identity: T,
+    f: &(dyn Fn(usize) -> T + Sync),
+    merge: fn(T, T) -> T,
+) -> T {
+    (0..chunks).into_par_iter().map(f).reduce(|| identity, merge)
 }
 
 #[cfg(all(test, not(feature = "dim3")))]

@@ -28,6 +28,7 @@ use crate::config::Transfer;
 use crate::error::{Field, SolverError};
 use crate::math::{Matrix, Real, Vector, outer};
 use crate::par::chunk_len;
+use crate::scratch::Scratch;
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -38,52 +39,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if self.config.transfer == Transfer::Apic {
             return self.g2p_apic(dt);
         }
-        let sc = &self.scratch;
-        let (idx, factors, shape) = (&sc.node_index, &sc.factors, &self.shape);
-        let (a, v) = (&sc.acceleration, &sc.velocity);
-        let step = self.step + 1;
-        let beta = self.config.pic_fraction;
-        let chunk = chunk_len(self.particles.len());
-        let mass = &self.particles.mass;
-        // Per chunk, in chunk order: the kinetic energy the PIC share removed (a sum whose order
-        // does not depend on the thread count).
-        let tallies: Vec<Result<Real, SolverError>> = self
-            .particles
-            .position
-            .par_chunks_mut(chunk)
-            .zip(self.particles.velocity.par_chunks_mut(chunk))
-            .enumerate()
-            .map(|(c, (xs, vs))| {
-                let mut removed = 0.0;
-                for (j, (x, vp)) in xs.iter_mut().zip(vs.iter_mut()).enumerate() {
-                    let p = c * chunk + j;
-                    let w = shape.weights(&factors[p]);
-                    let mut dx = Vector::ZERO;
-                    let mut dv = Vector::ZERO;
-                    for k in 0..N {
-                        let i = idx[p][k] as usize;
-                        // v_i^L = v_i + a_i Δt (eq 5)
-                        dx += w[k] * (v[i] + a[i] * dt);
-                        dv += w[k] * a[i];
-                    }
-                    let flip = *vp + dt * dv;
-                    let v_new = if beta > 0.0 {
-                        // Σ_i S_ip v_i^L = dx is the PIC velocity.
-                        let blended = flip + beta * (dx - flip);
-                        removed +=
-                            0.5 * mass[p] * (flip.length_squared() - blended.length_squared());
-                        blended
-                    } else {
-                        flip
-                    };
-                    let x_new = *x + dt * dx;
-                    check_finite(step, p, *x, x_new, v_new)?;
-                    *x = x_new;
-                    *vp = v_new;
-                }
-                Ok(removed)
-            })
-            .collect();
+        let p = &mut self.particles;
+        let tallies = flip_update(
+            &self.shape,
+            &self.scratch,
+            (&mut p.position, &mut p.velocity, &p.mass),
+            dt,
+            self.config.pic_fraction,
+            self.step + 1,
+        );
         let mut removed = 0.0;
         for t in tallies {
             removed += t?;
@@ -125,44 +89,116 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // v_i^L = v_i + a_i Δt (eq 5) once per node instead of once per particle and node (the
         // same operations: the same bits)
         let sc = &mut self.scratch;
-        sc.end_velocity.clear();
-        let (v, a) = (&sc.velocity, &sc.acceleration);
-        sc.end_velocity.par_extend(v.par_iter().zip(a).map(|(v, a)| *v + *a * dt));
-        let sc = &self.scratch;
-        let (idx, factors, shape) = (&sc.node_index, &sc.factors, &self.shape);
-        let end = &sc.end_velocity;
-        let step = self.step + 1;
+        end_velocities(&mut sc.end_velocity, &sc.velocity, &sc.acceleration, dt);
         let p = &mut self.particles;
-        let chunk = chunk_len(p.len());
-        let failure = p
-            .position
-            .par_chunks_mut(chunk)
-            .zip(p.velocity.par_chunks_mut(chunk))
-            .zip(p.affine.par_chunks_mut(chunk))
-            .enumerate()
-            .map(|(c, ((xs, vs), cs))| {
-                for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
-                    let q = c * chunk + j;
-                    let (w, grad) = (shape.weights(&factors[q]), shape.gradients(&factors[q]));
-                    let mut v_new = Vector::ZERO;
-                    let mut c_new = Matrix::ZERO;
-                    for k in 0..N {
-                        let v_end = end[idx[q][k] as usize];
-                        v_new += w[k] * v_end;
-                        let g = grad[k];
-                        c_new += outer(v_end, g);
-                    }
-                    let x_new = *x + dt * v_new;
-                    check_finite(step, q, *x, x_new, v_new)?;
-                    *x = x_new;
-                    *vp = v_new;
-                    *cp = c_new;
-                }
-                Ok(())
-            })
-            .find_first(Result::is_err);
-        failure.unwrap_or(Ok(()))
+        apic_update(
+            &self.shape,
+            &self.scratch,
+            (&mut p.position, &mut p.velocity, &mut p.affine),
+            dt,
+            self.step + 1,
+        )
     }
+}
+
+/// the FLIP update of eqs 6–7 with the PIC share `beta`, per chunk of particles in chunk order:
+/// the kinetic energy the PIC share removed. A free function generic over the shape functions
+/// alone (the constitutive model plays no part here): one copy per shape functions.
+#[allow(clippy::type_complexity)]
+fn flip_update<S: ShapeFunctions<N>, const N: usize>(
+    shape: &S,
+    sc: &Scratch<S::Factors, N>,
+    (position, velocity, mass): (&mut [Vector], &mut [Vector], &[Real]),
+    dt: Real,
+    beta: Real,
+    step: u64,
+) -> Vec<Result<Real, SolverError>> {
+    let (idx, factors) = (&sc.node_index, &sc.factors);
+    let (a, v) = (&sc.acceleration, &sc.velocity);
+    let chunk = chunk_len(mass.len());
+    // Per chunk, in chunk order: the kinetic energy the PIC share removed (a sum whose order
+    // does not depend on the thread count).
+    position
+        .par_chunks_mut(chunk)
+        .zip(velocity.par_chunks_mut(chunk))
+        .enumerate()
+        .map(|(c, (xs, vs))| {
+            let mut removed = 0.0;
+            for (j, (x, vp)) in xs.iter_mut().zip(vs.iter_mut()).enumerate() {
+                let p = c * chunk + j;
+                let w = shape.weights(&factors[p]);
+                let mut dx = Vector::ZERO;
+                let mut dv = Vector::ZERO;
+                for k in 0..N {
+                    let i = idx[p][k] as usize;
+                    // v_i^L = v_i + a_i Δt (eq 5)
+                    dx += w[k] * (v[i] + a[i] * dt);
+                    dv += w[k] * a[i];
+                }
+                let flip = *vp + dt * dv;
+                let v_new = if beta > 0.0 {
+                    // Σ_i S_ip v_i^L = dx is the PIC velocity.
+                    let blended = flip + beta * (dx - flip);
+                    removed += 0.5 * mass[p] * (flip.length_squared() - blended.length_squared());
+                    blended
+                } else {
+                    flip
+                };
+                let x_new = *x + dt * dx;
+                check_finite(step, p, *x, x_new, v_new)?;
+                *x = x_new;
+                *vp = v_new;
+            }
+            Ok(removed)
+        })
+        .collect()
+}
+
+/// the APIC update: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p, with the end
+/// velocities v_i^L of `scratch.end_velocity`; generic over the shape functions alone.
+fn apic_update<S: ShapeFunctions<N>, const N: usize>(
+    shape: &S,
+    sc: &Scratch<S::Factors, N>,
+    (position, velocity, affine): (&mut [Vector], &mut [Vector], &mut [Matrix]),
+    dt: Real,
+    step: u64,
+) -> Result<(), SolverError> {
+    let (idx, factors) = (&sc.node_index, &sc.factors);
+    let end = &sc.end_velocity;
+    let chunk = chunk_len(position.len());
+    let failure = position
+        .par_chunks_mut(chunk)
+        .zip(velocity.par_chunks_mut(chunk))
+        .zip(affine.par_chunks_mut(chunk))
+        .enumerate()
+        .map(|(c, ((xs, vs), cs))| {
+            for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
+                let q = c * chunk + j;
+                let (w, grad) = (shape.weights(&factors[q]), shape.gradients(&factors[q]));
+                let mut v_new = Vector::ZERO;
+                let mut c_new = Matrix::ZERO;
+                for k in 0..N {
+                    let v_end = end[idx[q][k] as usize];
+                    v_new += w[k] * v_end;
+                    let g = grad[k];
+                    c_new += outer(v_end, g);
+                }
+                let x_new = *x + dt * v_new;
+                check_finite(step, q, *x, x_new, v_new)?;
+                *x = x_new;
+                *vp = v_new;
+                *cp = c_new;
+            }
+            Ok(())
+        })
+        .find_first(Result::is_err);
+    failure.unwrap_or(Ok(()))
+}
+
+/// v_i^L = v_i + a_i Δt (eq 5) of every node into `end` (not generic: one copy).
+fn end_velocities(end: &mut Vec<Vector>, v: &[Vector], a: &[Vector], dt: Real) {
+    end.clear();
+    end.par_extend(v.par_iter().zip(a).map(|(v, a)| *v + *a * dt));
 }
 
 /// the guard of eqs 6–7: a non-finite new position or velocity stops the run at particle `q`,

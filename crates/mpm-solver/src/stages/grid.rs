@@ -120,13 +120,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &mut self.scratch;
         let small = self.small_mass;
         let g = self.config.gravity_at(self.time + 0.5 * dt);
-        sc.acceleration
-            .par_iter_mut()
-            .zip(sc.force.par_iter().zip(sc.mass.par_iter()))
-            .with_min_len(1024)
-            .for_each(|(a, (&f, &m))| {
-                *a = if m > small { f / m } else { g };
-            });
+        lumped_acceleration(&mut sc.acceleration, &sc.force, &sc.mass, small, g);
         self.solve_acceleration()?;
         let sc = &mut self.scratch;
 
@@ -279,11 +273,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// v_i ← v_i^L = v_i + a_i Δt (eq 5), for USL's strain increment.
     pub(crate) fn advance_velocity(&mut self, dt: Real) {
         let sc = &mut self.scratch;
-        sc.velocity.par_iter_mut().zip(sc.acceleration.par_iter()).with_min_len(1024).for_each(
-            |(v, &a)| {
-                *v += a * dt;
-            },
-        );
+        add_scaled(&mut sc.velocity, &sc.acceleration, dt);
     }
 
     /// the velocity constraint (eq 18) on `scratch.velocity` at boundary nodes, for a strain
@@ -324,6 +314,29 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             sc.velocity[b.node as usize] = v;
         }
     }
+}
+
+/// a_i = f_i / m_i at every node, g where the mass is below `small` (a node no material
+/// reaches holds none). Not generic over the model or shape functions: one copy.
+fn lumped_acceleration(
+    acc: &mut [Vector],
+    force: &[Vector],
+    mass: &[Real],
+    small: Real,
+    g: Vector,
+) {
+    acc.par_iter_mut().zip(force.par_iter().zip(mass.par_iter())).with_min_len(1024).for_each(
+        |(a, (&f, &m))| {
+            *a = if m > small { f / m } else { g };
+        },
+    );
+}
+
+/// v_i += a_i Δt at every node (not generic: one copy).
+fn add_scaled(v: &mut [Vector], a: &[Vector], dt: Real) {
+    v.par_iter_mut().zip(a.par_iter()).with_min_len(1024).for_each(|(v, &a)| {
+        *v += a * dt;
+    });
 }
 
 #[cfg(all(test, not(feature = "dim3")))]

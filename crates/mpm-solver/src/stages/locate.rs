@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{Friction, Wall};
-use mpm_grid::{BLOCK_SIDE, NodeId, ShapeFunctions, stencil_nodes};
+use mpm_grid::{BLOCK_SIDE, LocateError, NodeId, ShapeFunctions, stencil_nodes};
 use rayon::prelude::*;
 
 use crate::config::{Boundaries, Contact};
@@ -43,25 +43,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 // Fixed chunks, each run in particle order: the first chunk that fails reports
                 // its first failing particle, so the error names the same particle for any
                 // thread count.
-                let failure = sc
-                    .first_node
-                    .par_chunks_mut(chunk)
-                    .zip(sc.factors.par_chunks_mut(chunk))
-                    .enumerate()
-                    .map(|(c, (first, factors))| {
-                        let mut changed = false;
-                        for j in 0..first.len() {
-                            let p = c * chunk + j;
-                            match shape.factors(positions[p]) {
-                                Ok((node, f)) => {
-                                    changed |= store(node, f, &mut first[j], &mut factors[j])
-                                }
-                                Err(cause) => return Err((p, cause)),
-                            }
-                        }
-                        Ok(changed)
-                    })
-                    .try_reduce(|| false, |a, b| Ok(a | b));
+                let failure =
+                    factor_all(shape, positions, &mut sc.first_node, &mut sc.factors, chunk);
                 match failure {
                     Ok(changed) => (changed, None),
                     Err((particle, cause)) => {
@@ -293,6 +276,35 @@ fn wall_reach<S: ShapeFunctions<N>, const N: usize>(
     let half_size = volume.par_iter().map(|&v| crate::math::half_size(v)).reduce(|| 0.0, f64::max);
     let side = mpm_grid::stencil_side(n) as f64;
     (0.5 * side + 1.0) * diagonal + half_size
+}
+
+/// the stencil (first node and factors) of every particle, in fixed chunks; whether some
+/// stencil changed its nodes, or the first failing particle of some chunk. Generic over the
+/// shape functions alone.
+#[allow(clippy::type_complexity)]
+fn factor_all<S: ShapeFunctions<N>, const N: usize>(
+    shape: &S,
+    positions: &[Vector],
+    first: &mut [NodeId],
+    factors: &mut [S::Factors],
+    chunk: usize,
+) -> Result<bool, (usize, LocateError)> {
+    first
+        .par_chunks_mut(chunk)
+        .zip(factors.par_chunks_mut(chunk))
+        .enumerate()
+        .map(|(c, (first, factors))| {
+            let mut changed = false;
+            for j in 0..first.len() {
+                let p = c * chunk + j;
+                match shape.factors(positions[p]) {
+                    Ok((node, f)) => changed |= store(node, f, &mut first[j], &mut factors[j]),
+                    Err(cause) => return Err((p, cause)),
+                }
+            }
+            Ok(changed)
+        })
+        .try_reduce(|| false, |a, b| Ok(a | b))
 }
 
 /// For the block scatter (`p2g.rs`): each active node's block rank and place in its block's patch,

@@ -73,10 +73,10 @@ use mpm_grid::{NodeId, ShapeFunctions, stencil_side};
 use rayon::prelude::*;
 
 use crate::config::MassMatrix;
-use crate::consistent::Solve;
+use crate::consistent::{ConsistentScratch, Solve};
 use crate::error::SolverError;
 use crate::math::{Real, Vector};
-use crate::par::chunk_len;
+use crate::par::{chunk_len, map_chunks};
 use crate::scratch::NodePlane;
 use crate::solver::Solver;
 
@@ -109,10 +109,8 @@ const fn band_place(k: usize, l: usize, w: usize) -> usize {
 #[cfg(not(feature = "dim3"))]
 fn chunked_sum(n: usize, f: impl Fn(std::ops::Range<usize>) -> Vector + Sync) -> Vector {
     let chunk = chunk_len(n);
-    let parts: Vec<Vector> = (0..n.div_ceil(chunk))
-        .into_par_iter()
-        .map(|c| f(c * chunk..((c + 1) * chunk).min(n)))
-        .collect();
+    let part = |c: usize| f(c * chunk..((c + 1) * chunk).min(n));
+    let parts = map_chunks(n.div_ceil(chunk), &part);
     parts.iter().fold(Vector::ZERO, |s, &v| s + v)
 }
 
@@ -379,116 +377,123 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// preconditioned conjugate gradients on M x = rhs over the free nodes, from the x given
     /// (the lumped answer); the other nodes' x stay.
     fn solve_consistent(&mut self, x: &mut [Vector], which: Solve) -> Result<(), SolverError> {
-        let step = self.step + 1;
         let sc = &mut self.scratch;
-        let mass = &sc.mass[..];
-        let cm = &mut sc.consistent;
-        let band = cm.band;
-        let n = x.len();
-        let chunk = chunk_len(n);
-        let (values, neighbours, free) = (&cm.values[..], &cm.neighbours[..], &cm.free[..]);
-        let multiply = |i: usize, v: &[Vector]| row_times(values, neighbours, band, i, v);
-        // Tied ghosts (re-solve only): x_g = −x_j in every vector the matrix multiplies, and the
-        // image's row gets the ghost's, mirrored (Tᵀ: row j minus row g). Serial: a few nodes.
-        let slaves = &cm.slaves[..];
-        let tie = |v: &mut [Vector]| {
-            for &(g, j) in slaves {
-                v[g as usize] = -v[j as usize];
-            }
-        };
-        tie(x);
-        // r = b − M x; z = r / m; p = z.
-        {
-            let (xr, b) = (&*x, &cm.rhs[..]);
-            cm.residual.par_chunks_mut(chunk).enumerate().for_each(|(c, r)| {
-                for (k, r) in r.iter_mut().enumerate() {
-                    let i = c * chunk + k;
-                    *r = if free[i] { b[i] - multiply(i, xr) } else { Vector::ZERO };
-                }
-            });
-            for &(g, j) in slaves {
-                cm.residual[j as usize] -= b[g as usize] - multiply(g as usize, xr);
-            }
+        solve_consistent(self.step + 1, &sc.mass, &mut sc.consistent, x, which)
+    }
+}
+
+/// [`Solver::solve_consistent`]: not generic (one copy for every model and shape functions).
+#[cfg(not(feature = "dim3"))]
+fn solve_consistent(
+    step: u64,
+    mass: &[Real],
+    cm: &mut ConsistentScratch,
+    x: &mut [Vector],
+    which: Solve,
+) -> Result<(), SolverError> {
+    let band = cm.band;
+    let n = x.len();
+    let chunk = chunk_len(n);
+    let (values, neighbours, free) = (&cm.values[..], &cm.neighbours[..], &cm.free[..]);
+    let multiply = |i: usize, v: &[Vector]| row_times(values, neighbours, band, i, v);
+    // Tied ghosts (re-solve only): x_g = −x_j in every vector the matrix multiplies, and the
+    // image's row gets the ghost's, mirrored (Tᵀ: row j minus row g). Serial: a few nodes.
+    let slaves = &cm.slaves[..];
+    let tie = |v: &mut [Vector]| {
+        for &(g, j) in slaves {
+            v[g as usize] = -v[j as usize];
         }
-        let rhs = chunked_sum(n, |range| {
+    };
+    tie(x);
+    // r = b − M x; z = r / m; p = z.
+    {
+        let (xr, b) = (&*x, &cm.rhs[..]);
+        cm.residual.par_chunks_mut(chunk).enumerate().for_each(|(c, r)| {
+            for (k, r) in r.iter_mut().enumerate() {
+                let i = c * chunk + k;
+                *r = if free[i] { b[i] - multiply(i, xr) } else { Vector::ZERO };
+            }
+        });
+        for &(g, j) in slaves {
+            cm.residual[j as usize] -= b[g as usize] - multiply(g as usize, xr);
+        }
+    }
+    let rhs = chunked_sum(n, |range| {
+        range.filter(|&i| free[i]).fold(Vector::ZERO, |s, i| s + cm.rhs[i] * cm.rhs[i] / mass[i])
+    });
+    for ((p, &r), &m) in cm.direction.iter_mut().zip(&cm.residual).zip(mass) {
+        *p = if m > 0.0 { r / m } else { Vector::ZERO };
+    }
+    tie(&mut cm.direction);
+    let mut rz = chunked_sum(n, |range| {
+        range.fold(Vector::ZERO, |s, i| s + cm.residual[i] * cm.direction[i])
+    });
+    // The scale is the right-hand side's norm, or the starting residual's where prescribed
+    // nodes (a re-solve) make that larger: a free node's right-hand side is then f minus
+    // the prescribed nodes' share, which can be all there is (a body at rest on a fixed wall).
+    let scale = (rhs.x + rhs.y).max(rz.x + rz.y);
+    let target = SOLVE_TOLERANCE * SOLVE_TOLERANCE * scale;
+    let mut iterations = 0;
+    // (a NaN residual enters the loop and is reported, not accepted)
+    while rz.x + rz.y > target || (rz.x + rz.y).is_nan() {
+        if iterations == MAX_ITERATIONS || !(rz.x + rz.y).is_finite() {
+            cm.iterations += iterations as u64;
+            return Err(SolverError::MassSolve {
+                step,
+                solve: which.name(),
+                iterations,
+                relative_residual: ((rz.x + rz.y) / scale).sqrt(),
+            });
+        }
+        iterations += 1;
+        let direction = &cm.direction[..];
+        cm.product.par_chunks_mut(chunk).enumerate().for_each(|(c, q)| {
+            for (k, q) in q.iter_mut().enumerate() {
+                let i = c * chunk + k;
+                *q = if free[i] { multiply(i, direction) } else { Vector::ZERO };
+            }
+        });
+        for &(g, j) in slaves {
+            cm.product[j as usize] -= multiply(g as usize, direction);
+        }
+        let pq = chunked_sum(n, |range| {
+            range.fold(Vector::ZERO, |s, i| s + cm.direction[i] * cm.product[i])
+        });
+        let alpha = Vector::new(
+            if pq.x > 0.0 { rz.x / pq.x } else { 0.0 },
+            if pq.y > 0.0 { rz.y / pq.y } else { 0.0 },
+        );
+        let (residual, product) = (&mut cm.residual, &cm.product);
+        x.par_chunks_mut(chunk).zip(residual.par_chunks_mut(chunk)).enumerate().for_each(
+            |(c, (xs, rs))| {
+                for (k, (x, r)) in xs.iter_mut().zip(rs).enumerate() {
+                    let i = c * chunk + k;
+                    *x += alpha * direction[i];
+                    *r -= alpha * product[i];
+                }
+            },
+        );
+        let rz_new = chunked_sum(n, |range| {
             range
                 .filter(|&i| free[i])
-                .fold(Vector::ZERO, |s, i| s + cm.rhs[i] * cm.rhs[i] / mass[i])
+                .fold(Vector::ZERO, |s, i| s + cm.residual[i] * cm.residual[i] / mass[i])
         });
-        for ((p, &r), &m) in cm.direction.iter_mut().zip(&cm.residual).zip(mass) {
-            *p = if m > 0.0 { r / m } else { Vector::ZERO };
-        }
+        let beta = Vector::new(
+            if rz.x > 0.0 { rz_new.x / rz.x } else { 0.0 },
+            if rz.y > 0.0 { rz_new.y / rz.y } else { 0.0 },
+        );
+        rz = rz_new;
+        let residual = &cm.residual[..];
+        cm.direction.par_chunks_mut(chunk).enumerate().for_each(|(c, ps)| {
+            for (k, p) in ps.iter_mut().enumerate() {
+                let i = c * chunk + k;
+                *p = if free[i] { residual[i] / mass[i] + beta * *p } else { Vector::ZERO };
+            }
+        });
         tie(&mut cm.direction);
-        let mut rz = chunked_sum(n, |range| {
-            range.fold(Vector::ZERO, |s, i| s + cm.residual[i] * cm.direction[i])
-        });
-        // The scale is the right-hand side's norm, or the starting residual's where prescribed
-        // nodes (a re-solve) make that larger: a free node's right-hand side is then f minus
-        // the prescribed nodes' share, which can be all there is (a body at rest on a fixed wall).
-        let scale = (rhs.x + rhs.y).max(rz.x + rz.y);
-        let target = SOLVE_TOLERANCE * SOLVE_TOLERANCE * scale;
-        let mut iterations = 0;
-        // (a NaN residual enters the loop and is reported, not accepted)
-        while rz.x + rz.y > target || (rz.x + rz.y).is_nan() {
-            if iterations == MAX_ITERATIONS || !(rz.x + rz.y).is_finite() {
-                cm.iterations += iterations as u64;
-                return Err(SolverError::MassSolve {
-                    step,
-                    solve: which.name(),
-                    iterations,
-                    relative_residual: ((rz.x + rz.y) / scale).sqrt(),
-                });
-            }
-            iterations += 1;
-            let direction = &cm.direction[..];
-            cm.product.par_chunks_mut(chunk).enumerate().for_each(|(c, q)| {
-                for (k, q) in q.iter_mut().enumerate() {
-                    let i = c * chunk + k;
-                    *q = if free[i] { multiply(i, direction) } else { Vector::ZERO };
-                }
-            });
-            for &(g, j) in slaves {
-                cm.product[j as usize] -= multiply(g as usize, direction);
-            }
-            let pq = chunked_sum(n, |range| {
-                range.fold(Vector::ZERO, |s, i| s + cm.direction[i] * cm.product[i])
-            });
-            let alpha = Vector::new(
-                if pq.x > 0.0 { rz.x / pq.x } else { 0.0 },
-                if pq.y > 0.0 { rz.y / pq.y } else { 0.0 },
-            );
-            let (residual, product) = (&mut cm.residual, &cm.product);
-            x.par_chunks_mut(chunk).zip(residual.par_chunks_mut(chunk)).enumerate().for_each(
-                |(c, (xs, rs))| {
-                    for (k, (x, r)) in xs.iter_mut().zip(rs).enumerate() {
-                        let i = c * chunk + k;
-                        *x += alpha * direction[i];
-                        *r -= alpha * product[i];
-                    }
-                },
-            );
-            let rz_new = chunked_sum(n, |range| {
-                range
-                    .filter(|&i| free[i])
-                    .fold(Vector::ZERO, |s, i| s + cm.residual[i] * cm.residual[i] / mass[i])
-            });
-            let beta = Vector::new(
-                if rz.x > 0.0 { rz_new.x / rz.x } else { 0.0 },
-                if rz.y > 0.0 { rz_new.y / rz.y } else { 0.0 },
-            );
-            rz = rz_new;
-            let residual = &cm.residual[..];
-            cm.direction.par_chunks_mut(chunk).enumerate().for_each(|(c, ps)| {
-                for (k, p) in ps.iter_mut().enumerate() {
-                    let i = c * chunk + k;
-                    *p = if free[i] { residual[i] / mass[i] + beta * *p } else { Vector::ZERO };
-                }
-            });
-            tie(&mut cm.direction);
-        }
-        cm.iterations += iterations as u64;
-        Ok(())
     }
+    cm.iterations += iterations as u64;
+    Ok(())
 }
 
 /// The 3D build has the lumped matrix only: the solver's settings refuse the consistent one

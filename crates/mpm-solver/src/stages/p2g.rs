@@ -25,8 +25,8 @@ use rayon::prelude::*;
 use crate::config::Transfer;
 use crate::consistent::Solve;
 use crate::error::SolverError;
-use crate::math::{DIM, Real, Stress, Vector};
-use crate::scratch::Scratch;
+use crate::math::{DIM, Matrix, Real, Stress, Vector};
+use crate::scratch::{NEIGHBOURS, Scratch};
 use crate::solver::Solver;
 
 /// nodes along each side of a block's patch for stencils of `n` nodes: the block's 8 and the
@@ -102,194 +102,23 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         dt_back: Real,
         g: Vector,
     ) {
-        const { assert!(patch_side(N).pow(DIM as u32) <= MAX_PATCH) };
-        let side = patch_side(N);
-        let cells = side.pow(DIM as u32);
-        let w = stencil_side(N);
-        // slot k of a stencil lies k mod w, k div w (, k div w²) nodes from its first node
-        let offset: [usize; N] = std::array::from_fn(|k| {
-            let d = slot_offset(k, w);
-            (0..DIM).rev().fold(0, |p, a| p * side + d[a] as usize)
-        });
-        // (3D) each slot's offset from the first node along each axis, and the patch's strides
-        #[cfg(feature = "dim3")]
-        let slots: [[usize; DIM]; N] =
-            std::array::from_fn(|k| slot_offset(k, w).map(|d| d as usize));
-        #[cfg(feature = "dim3")]
-        let stride = [1, side, side * side];
-        let shape = &self.shape;
         let p = &self.particles;
-        let (mass, velocity, volume, stress) =
-            (&p.mass[..], &p.velocity[..], &p.volume[..], &p.stress[..]);
-        let (position, affine) = (&p.position[..], &p.affine[..]);
-        // empty unless a caller prescribed per-particle body forces (then one per particle)
-        let body = &self.body_force[..];
-        let Scratch {
-            factors,
-            bin_start,
-            bin_particle,
-            base,
-            active,
-            patch_mass,
-            patch_momentum,
-            patch_force,
-            node_block,
-            node_local,
-            neighbours,
-            mass: nodal_mass,
-            velocity: nodal_velocity,
-            force: nodal_force,
-            ..
-        } = &mut self.scratch;
-        let (factors, base) = (&factors[..], &base[..]);
-        patch_mass
-            .par_chunks_mut(cells)
-            .zip(patch_momentum.par_chunks_mut(cells))
-            .zip(patch_force.par_chunks_mut(cells))
-            .enumerate()
-            .for_each(|(b, ((bm, bq), bf))| {
-                let mut place = [Vector::ZERO; MAX_PATCH];
-                if MASS {
-                    bm.fill(0.0);
-                }
-                if MOMENTUM {
-                    bq.fill(Vector::ZERO);
-                }
-                if FORCE {
-                    bf.fill(Vector::ZERO);
-                }
-                if APIC {
-                    let o = active.block_origin(b);
-                    for (c, x) in place[..cells].iter_mut().enumerate() {
-                        let d = std::array::from_fn(|a| ((c / side.pow(a as u32)) % side) as i32);
-                        *x = shape.node_position(o.offset(d));
-                    }
-                }
-                let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
-                for q in bin {
-                    let q = q.load(Ordering::Relaxed) as usize;
-                    let at = usize::from(base[q]);
-                    let (m, v, f) = (mass[q], velocity[q], &factors[q]);
-                    let wq = shape.weights(f);
-                    let gq = if FORCE { shape.gradients(f) } else { [Vector::ZERO; N] };
-                    let (vol, s) = (volume[q], stress[q]);
-                    let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
-                    let (c_q, x0) = if APIC {
-                        (affine[q], position[q] - dt_back * v)
-                    } else {
-                        Default::default()
-                    };
-                    // In 3D (a regular grid) x_i − x_p separates by axis, so C (x_i − x_p) is
-                    // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
-                    // along each axis: 3w products per particle instead of 9 per node.
-                    #[cfg(feature = "dim3")]
-                    let columns: [[Vector; 3]; DIM] = if APIC {
-                        std::array::from_fn(|a| {
-                            std::array::from_fn(|t| {
-                                let node = place[at + t.min(w - 1) * stride[a]];
-                                c_q.col(a) * (node[a] - x0[a])
-                            })
-                        })
-                    } else {
-                        Default::default()
-                    };
-                    for k in 0..N {
-                        let c = at + offset[k];
-                        let mw = m * wq[k];
-                        if MASS {
-                            bm[c] += mw;
-                        }
-                        #[cfg(not(feature = "dim3"))]
-                        if MOMENTUM {
-                            bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
-                        }
-                        #[cfg(feature = "dim3")]
-                        if MOMENTUM {
-                            bq[c] += if APIC {
-                                let [tx, ty, tz] = slots[k];
-                                mw * (v + (columns[0][tx] + columns[1][ty] + columns[2][tz]))
-                            } else {
-                                mw * v
-                            };
-                        }
-                        if FORCE {
-                            bf[c] += mw * b - vol * in_plane(&s, gq[k]);
-                        }
-                    }
-                }
-            });
-        let (pm, pq, pf) = (&patch_mass[..], &patch_momentum[..], &patch_force[..]);
-        let edge = w - 1;
-        let block = BLOCK_SIDE as usize;
-        nodal_mass
-            .par_iter_mut()
-            .zip(nodal_velocity.par_iter_mut().zip(nodal_force.par_iter_mut()))
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, (m, (v, f)))| {
-                let b = node_block[i] as usize;
-                let c = usize::from(node_local[i]);
-                let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
-                let mut add = |src: u32, at: usize| {
-                    if src != u32::MAX {
-                        let at = src as usize * cells + at;
-                        if MASS {
-                            ms += pm[at];
-                        }
-                        if MOMENTUM {
-                            q += pq[at];
-                        }
-                        if FORCE {
-                            fs += pf[at];
-                        }
-                    }
-                };
-                #[cfg(not(feature = "dim3"))]
-                {
-                    let (ci, cj) = (c % side, c / side);
-                    let [below_left, below, left] = neighbours[b];
-                    if ci < edge && cj < edge {
-                        add(below_left, c + block + side * block);
-                    }
-                    if cj < edge {
-                        add(below, c + side * block);
-                    }
-                    if ci < edge {
-                        add(left, c + block);
-                    }
-                }
-                // neighbour m lies one block lower along the axes whose bit of m is 0
-                // (`locate.rs`), in the order m = 0, 1, …: the node is in its patch where it is
-                // within the w − 1 edge layers along each of those axes.
-                #[cfg(feature = "dim3")]
-                {
-                    let local = [c % side, (c / side) % side, c / (side * side)];
-                    let stride = [1, side, side * side];
-                    for (m, &src) in neighbours[b].iter().enumerate() {
-                        let mut at = c;
-                        let mut inside = true;
-                        for a in 0..DIM {
-                            if (m >> a) & 1 == 0 {
-                                inside &= local[a] < edge;
-                                at += block * stride[a];
-                            }
-                        }
-                        if inside {
-                            add(src, at);
-                        }
-                    }
-                }
-                add(b as u32, c);
-                if MASS {
-                    *m = ms;
-                }
-                if MOMENTUM {
-                    *v = if *m > 0.0 { q / *m } else { Vector::ZERO };
-                }
-                if FORCE {
-                    *f = fs;
-                }
-            });
+        let sources = Sources {
+            mass: &p.mass,
+            velocity: &p.velocity,
+            volume: &p.volume,
+            stress: &p.stress,
+            position: &p.position,
+            affine: &p.affine,
+            body: &self.body_force,
+        };
+        scatter::<S, N, MASS, MOMENTUM, FORCE, APIC>(
+            &self.shape,
+            &sources,
+            &mut self.scratch,
+            dt_back,
+            g,
+        );
         if self.config.periodic.is_some() {
             self.fold_periodic::<MASS, MOMENTUM, FORCE>();
         }
@@ -324,6 +153,236 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             }
         }
     }
+}
+
+/// the particle arrays a scatter reads.
+struct Sources<'a> {
+    mass: &'a [Real],
+    velocity: &'a [Vector],
+    volume: &'a [Real],
+    stress: &'a [Stress],
+    position: &'a [Vector],
+    affine: &'a [Matrix],
+    /// empty unless a caller prescribed per-particle body forces (then one per particle)
+    body: &'a [Vector],
+}
+
+/// the block scatter of [`Solver::scatter`] into the patches, then [`reduce`]. A free function
+/// generic over the shape functions and the sums formed, not over the constitutive model, which
+/// it does not use: every model of a scene shares one copy.
+fn scatter<
+    S: ShapeFunctions<N>,
+    const N: usize,
+    const MASS: bool,
+    const MOMENTUM: bool,
+    const FORCE: bool,
+    const APIC: bool,
+>(
+    shape: &S,
+    p: &Sources<'_>,
+    sc: &mut Scratch<S::Factors, N>,
+    dt_back: Real,
+    g: Vector,
+) {
+    const { assert!(patch_side(N).pow(DIM as u32) <= MAX_PATCH) };
+    let side = patch_side(N);
+    let cells = side.pow(DIM as u32);
+    let w = stencil_side(N);
+    // slot k of a stencil lies k mod w, k div w (, k div w²) nodes from its first node
+    let offset: [usize; N] = std::array::from_fn(|k| {
+        let d = slot_offset(k, w);
+        (0..DIM).rev().fold(0, |p, a| p * side + d[a] as usize)
+    });
+    // (3D) each slot's offset from the first node along each axis, and the patch's strides
+    #[cfg(feature = "dim3")]
+    let slots: [[usize; DIM]; N] = std::array::from_fn(|k| slot_offset(k, w).map(|d| d as usize));
+    #[cfg(feature = "dim3")]
+    let stride = [1, side, side * side];
+    let (mass, velocity, volume, stress) = (p.mass, p.velocity, p.volume, p.stress);
+    let (position, affine) = (p.position, p.affine);
+    // empty unless a caller prescribed per-particle body forces (then one per particle)
+    let body = p.body;
+    let Scratch {
+        factors,
+        bin_start,
+        bin_particle,
+        base,
+        active,
+        patch_mass,
+        patch_momentum,
+        patch_force,
+        node_block,
+        node_local,
+        neighbours,
+        mass: nodal_mass,
+        velocity: nodal_velocity,
+        force: nodal_force,
+        ..
+    } = sc;
+    let (factors, base) = (&factors[..], &base[..]);
+    patch_mass
+        .par_chunks_mut(cells)
+        .zip(patch_momentum.par_chunks_mut(cells))
+        .zip(patch_force.par_chunks_mut(cells))
+        .enumerate()
+        .for_each(|(b, ((bm, bq), bf))| {
+            let mut place = [Vector::ZERO; MAX_PATCH];
+            if MASS {
+                bm.fill(0.0);
+            }
+            if MOMENTUM {
+                bq.fill(Vector::ZERO);
+            }
+            if FORCE {
+                bf.fill(Vector::ZERO);
+            }
+            if APIC {
+                let o = active.block_origin(b);
+                for (c, x) in place[..cells].iter_mut().enumerate() {
+                    let d = std::array::from_fn(|a| ((c / side.pow(a as u32)) % side) as i32);
+                    *x = shape.node_position(o.offset(d));
+                }
+            }
+            let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
+            for q in bin {
+                let q = q.load(Ordering::Relaxed) as usize;
+                let at = usize::from(base[q]);
+                let (m, v, f) = (mass[q], velocity[q], &factors[q]);
+                let wq = shape.weights(f);
+                let gq = if FORCE { shape.gradients(f) } else { [Vector::ZERO; N] };
+                let (vol, s) = (volume[q], stress[q]);
+                let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
+                let (c_q, x0) =
+                    if APIC { (affine[q], position[q] - dt_back * v) } else { Default::default() };
+                // In 3D (a regular grid) x_i − x_p separates by axis, so C (x_i − x_p) is
+                // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
+                // along each axis: 3w products per particle instead of 9 per node.
+                #[cfg(feature = "dim3")]
+                let columns: [[Vector; 3]; DIM] = if APIC {
+                    std::array::from_fn(|a| {
+                        std::array::from_fn(|t| {
+                            let node = place[at + t.min(w - 1) * stride[a]];
+                            c_q.col(a) * (node[a] - x0[a])
+                        })
+                    })
+                } else {
+                    Default::default()
+                };
+                for k in 0..N {
+                    let c = at + offset[k];
+                    let mw = m * wq[k];
+                    if MASS {
+                        bm[c] += mw;
+                    }
+                    #[cfg(not(feature = "dim3"))]
+                    if MOMENTUM {
+                        bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
+                    }
+                    #[cfg(feature = "dim3")]
+                    if MOMENTUM {
+                        bq[c] += if APIC {
+                            let [tx, ty, tz] = slots[k];
+                            mw * (v + (columns[0][tx] + columns[1][ty] + columns[2][tz]))
+                        } else {
+                            mw * v
+                        };
+                    }
+                    if FORCE {
+                        bf[c] += mw * b - vol * in_plane(&s, gq[k]);
+                    }
+                }
+            }
+        });
+    reduce::<N, MASS, MOMENTUM, FORCE>(
+        (&patch_mass[..], &patch_momentum[..], &patch_force[..]),
+        (&node_block[..], &node_local[..], &neighbours[..]),
+        (&mut nodal_mass[..], &mut nodal_velocity[..], &mut nodal_force[..]),
+    );
+}
+
+/// the patches' sums into the nodal arrays: each node adds the patches that hold it in a fixed
+/// order (the module docs). Generic over the stencil size and the sums formed only: one copy per
+/// stencil size, whatever the model and shape functions.
+#[allow(clippy::type_complexity)]
+fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
+    (pm, pq, pf): (&[Real], &[Vector], &[Vector]),
+    (node_block, node_local, neighbours): (&[u32], &[u8], &[[u32; NEIGHBOURS]]),
+    (nodal_mass, nodal_velocity, nodal_force): (&mut [Real], &mut [Vector], &mut [Vector]),
+) {
+    let side = patch_side(N);
+    let cells = side.pow(DIM as u32);
+    let w = stencil_side(N);
+    let edge = w - 1;
+    let block = BLOCK_SIDE as usize;
+    nodal_mass
+        .par_iter_mut()
+        .zip(nodal_velocity.par_iter_mut().zip(nodal_force.par_iter_mut()))
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, (m, (v, f)))| {
+            let b = node_block[i] as usize;
+            let c = usize::from(node_local[i]);
+            let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
+            let mut add = |src: u32, at: usize| {
+                if src != u32::MAX {
+                    let at = src as usize * cells + at;
+                    if MASS {
+                        ms += pm[at];
+                    }
+                    if MOMENTUM {
+                        q += pq[at];
+                    }
+                    if FORCE {
+                        fs += pf[at];
+                    }
+                }
+            };
+            #[cfg(not(feature = "dim3"))]
+            {
+                let (ci, cj) = (c % side, c / side);
+                let [below_left, below, left] = neighbours[b];
+                if ci < edge && cj < edge {
+                    add(below_left, c + block + side * block);
+                }
+                if cj < edge {
+                    add(below, c + side * block);
+                }
+                if ci < edge {
+                    add(left, c + block);
+                }
+            }
+            // neighbour m lies one block lower along the axes whose bit of m is 0
+            // (`locate.rs`), in the order m = 0, 1, …: the node is in its patch where it is
+            // within the w − 1 edge layers along each of those axes.
+            #[cfg(feature = "dim3")]
+            {
+                let local = [c % side, (c / side) % side, c / (side * side)];
+                let stride = [1, side, side * side];
+                for (m, &src) in neighbours[b].iter().enumerate() {
+                    let mut at = c;
+                    let mut inside = true;
+                    for a in 0..DIM {
+                        if (m >> a) & 1 == 0 {
+                            inside &= local[a] < edge;
+                            at += block * stride[a];
+                        }
+                    }
+                    if inside {
+                        add(src, at);
+                    }
+                }
+            }
+            add(b as u32, c);
+            if MASS {
+                *m = ms;
+            }
+            if MOMENTUM {
+                *v = if *m > 0.0 { q / *m } else { Vector::ZERO };
+            }
+            if FORCE {
+                *f = fs;
+            }
+        });
 }
 
 /// σ·G in the plane of the analysis (plane strain: σ_zz does not act on an in-plane gradient).

@@ -37,12 +37,11 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::ShapeFunctions;
-use rayon::prelude::*;
 
 use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
 use crate::math::Real;
-use crate::par::chunk_len;
+use crate::par::{chunk_len, reduce_chunks};
 use crate::signal::{
     Fastest, SLOWEST, StepLimit, TRUE_COURANT_MAX, particle_signal, stable_dt, wave_modulus,
 };
@@ -113,27 +112,24 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let n = p.len();
         let chunk = chunk_len(n);
         let weight = self.true_signal_weight();
-        (0..n.div_ceil(chunk))
-            .into_par_iter()
-            .map(|c| {
-                let mut best = SLOWEST;
-                for i in c * chunk..((c + 1) * chunk).min(n) {
-                    let m = usize::from(p.material[i]);
-                    let (modulus, cap) = wave_modulus(
-                        &self.materials[m],
-                        &p.state[i],
-                        self.p_modulus[m],
-                        self.signal_cap[m],
-                        self.reference_density[m],
-                    );
-                    let speed = p.velocity[i].length();
-                    let signal =
-                        particle_signal(modulus, cap, weight, p.volume[i], p.mass[i], speed);
-                    best = best.with(signal, speed, i);
-                }
-                best
-            })
-            .reduce(|| SLOWEST, Fastest::merge)
+        let chunk_best = |c: usize| {
+            let mut best = SLOWEST;
+            for i in c * chunk..((c + 1) * chunk).min(n) {
+                let m = usize::from(p.material[i]);
+                let (modulus, cap) = wave_modulus(
+                    &self.materials[m],
+                    &p.state[i],
+                    self.p_modulus[m],
+                    self.signal_cap[m],
+                    self.reference_density[m],
+                );
+                let speed = p.velocity[i].length();
+                let signal = particle_signal(modulus, cap, weight, p.volume[i], p.mass[i], speed);
+                best = best.with(signal, speed, i);
+            }
+            best
+        };
+        reduce_chunks(n.div_ceil(chunk), SLOWEST, &chunk_best, Fastest::merge)
     }
 }
 
