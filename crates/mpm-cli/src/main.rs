@@ -634,13 +634,7 @@ fn finish(
             if !quiet {
                 print_summary(&s, out);
             }
-            if s.status == RunStatus::Interrupted && s.error.is_some() {
-                // (a 3D run: no checkpoint to resume from, the message says so)
-                eprintln!("mpm: {}", s.error.as_deref().unwrap_or_default());
-                if signals.terminated.load(Ordering::SeqCst) {
-                    return ExitCode::from(143);
-                }
-            } else if s.status == RunStatus::Interrupted {
+            if s.status == RunStatus::Interrupted {
                 eprintln!(
                     "mpm: interrupted at t = {} s; continue with `mpm resume {}`",
                     s.simulated_time,

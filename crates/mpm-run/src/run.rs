@@ -238,6 +238,15 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
         return Ok(done);
     }
     mpm_output::dir::layout(dir)?;
+    if mpm_scene::declared_dimension(&c.scene_text) == 3 {
+        return crate::space::resume_space(dir, c, opts);
+    }
+    if c.state.dimension() != 2 {
+        return Err(RunError::Output(OutputError::Checkpoint {
+            path,
+            reason: "its scene is a 2D scene but its state is a 3D run's".into(),
+        }));
+    }
     // files the scene names (DEMs, CSV polylines) are relative to the scene file's directory
     let scene = match Path::new(&c.origin).parent() {
         Some(d) if !c.origin.starts_with("embedded:") => {

@@ -6,19 +6,20 @@
 //! The runout measures are the 2D ones taken in the vertical plane of the runout direction
 //! (`SpaceScene::runout_direction`): a particle at x counts at station x·d and height y, so
 //! the front, tail, thickness (over the whole width) and travel angle follow that direction;
-//! the centre of mass's travel is its 3D distance. Not yet in 3D: checkpoints and `mpm resume`
-//! (an interrupted 3D run writes its files and summary, no checkpoint), probes, envelopes, the
-//! observed deposit, plots.
+//! the centre of mass's travel is its 3D distance. Checkpoints (every
+//! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
+//! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume`]
+//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit, plots.
 
 use std::ops::ControlFlow;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::DVec2;
 use mpm_grid3d::ShapeFunctions;
-use mpm_output::checkpoint::state_hash;
+use mpm_output::checkpoint::{self, CheckpointFile, History, state_hash};
 use mpm_output::csv::{self, EnergyRow};
 use mpm_output::dir::prepare_dir;
 use mpm_output::{OutputError, atomic, vtk};
@@ -27,7 +28,7 @@ use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
-use mpm_scene::{SpaceScene, dispatch_space, fnv1a};
+use mpm_scene::{SavedState, SpaceScene, dispatch_space, fnv1a};
 use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport};
 
 use crate::driver::slot;
@@ -111,12 +112,69 @@ pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSumma
     for w in &scene.warnings {
         opts.progress.warn(&w.to_string());
     }
-    with_pool(opts, scene.seeds.len(), |threads| dispatch_space(scene, SpaceRun { opts, threads })?)
+    with_pool(opts, scene.seeds.len(), |threads| {
+        let run = SpaceRun { opts, threads, resume: None, dir: opts.out_dir.clone() };
+        dispatch_space(scene, run)?
+    })
+}
+
+/// Continues the 3D run of checkpoint `c` (read from `dir`, its scene checked against the
+/// folder's by [`crate::resume`]) to its end time, writing into `dir`.
+pub(crate) fn resume_space(
+    dir: &Path,
+    c: CheckpointFile,
+    opts: &RunOptions,
+) -> Result<RunSummary, RunError> {
+    let path = dir.join(checkpoint::FILE_NAME);
+    let refuse =
+        |reason: String| RunError::Output(OutputError::Checkpoint { path: path.clone(), reason });
+    // (a 3D scene names no other file)
+    let scene = mpm_scene::load_space_str(&c.scene_text, &c.origin)?;
+    if c.state.dimension() != 3 {
+        return Err(refuse("its scene is a 3D scene but its state is a 2D run's".into()));
+    }
+    let (time, step, particles) = c.state.clock();
+    if !(time.is_finite() && (0.0..=scene.end_time).contains(&time)) {
+        return Err(refuse(format!(
+            "time {time:e} s is not between 0 and end_time = {} s",
+            scene.end_time
+        )));
+    }
+    if step > scene.max_steps {
+        return Err(refuse(format!("step {step} is above max_steps = {}", scene.max_steps)));
+    }
+    if particles != scene.seeds.len() {
+        return Err(refuse(format!(
+            "{particles} particles, but its scene generates {}",
+            scene.seeds.len()
+        )));
+    }
+    // at most one row and one frame per step, besides those of t = 0
+    let h = &c.history;
+    let rows = step.saturating_add(1);
+    for (what, n) in [
+        ("energy rows", h.energy.len()),
+        ("runout rows", h.runout.len()),
+        ("frames", h.frames.len()),
+    ] {
+        if n as u64 > rows {
+            return Err(refuse(format!("{n} {what} after {step} steps (at most {rows})")));
+        }
+    }
+    let resume = Some((c.state, c.history));
+    with_pool(opts, scene.seeds.len(), |threads| {
+        let run = SpaceRun { opts, threads, resume, dir: Some(dir.to_path_buf()) };
+        dispatch_space(&scene, run)?
+    })
 }
 
 struct SpaceRun<'a> {
     opts: &'a RunOptions,
     threads: usize,
+    /// the state and output history of the run to continue, if resumed.
+    resume: Option<(SavedState, History)>,
+    /// where the run writes (`opts.out_dir`, or a resumed run's folder).
+    dir: Option<PathBuf>,
 }
 
 impl SpaceJob for SpaceRun<'_> {
@@ -128,14 +186,36 @@ impl SpaceJob for SpaceRun<'_> {
         shape: S,
         materials: Vec<M>,
     ) -> Self::Output {
-        let particles = space_particles(&scene.seeds, &materials);
-        let mut solver = Solver::new(shape, materials, particles, scene.config.clone())
-            .map_err(|e| setup_error(scene.origin(), &e.to_string()))?;
-        let mut d = SpaceDriver::begin(scene, self.opts, &solver);
-        d.progress.start(scene.end_time, 0.0, 0);
-        d.record(&solver);
-        d.write_frame(&solver)?;
-        d.flush()?;
+        let (mut solver, history) = match self.resume {
+            None => {
+                let particles = space_particles(&scene.seeds, &materials);
+                let solver = Solver::new(shape, materials, particles, scene.config.clone());
+                (solver.map_err(|e| setup_error(scene.origin(), &e.to_string()))?, None)
+            }
+            Some((state, history)) => {
+                let Some(c) = M::unwrap_space(state) else {
+                    return Err(setup_error(
+                        scene.origin(),
+                        "the checkpoint holds the state of other material models than its \
+                         scene's: run the scene again",
+                    ));
+                };
+                let solver = Solver::from_checkpoint(shape, materials, scene.config.clone(), c);
+                (solver.map_err(|e| setup_error(scene.origin(), &e.to_string()))?, Some(history))
+            }
+        };
+        let resumed = history.is_some();
+        let mut d = SpaceDriver::begin(scene, self.dir.as_deref(), self.opts, &solver, history);
+        d.progress.start(scene.end_time, solver.time(), solver.step_count());
+        if resumed {
+            // the rows and frames a stopped session wrote past its checkpoint give way to the
+            // checkpoint's
+            d.rewrite_outputs()?;
+        } else {
+            d.record(&solver);
+            d.write_frame(&solver)?;
+            d.flush()?;
+        }
         let start = Instant::now();
         let result = solver.run_until(scene.end_time, &mut d);
         d.wall_time = start.elapsed().as_secs_f64();
@@ -159,10 +239,8 @@ impl SpaceJob for SpaceRun<'_> {
             (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
                 (RunStatus::EnergyAlarm, d.alarm_message())
             }
-            (Ok(RunEnd::Stopped), None) => (
-                RunStatus::Interrupted,
-                Some("interrupted (3D runs write no checkpoint yet: run the scene again)".into()),
-            ),
+            // (as in 2D: the front end says where to resume)
+            (Ok(RunEnd::Stopped), None) => (RunStatus::Interrupted, None),
         };
         let summary = d.finish(&solver, status, error, self.threads)?;
         match result {
@@ -182,6 +260,11 @@ enum Stop {
 
 struct SpaceDriver<'a> {
     scene: &'a SpaceScene,
+    /// when this session started, and at which step.
+    session: (Instant, u64),
+    /// wall time (s) and particle-steps of earlier sessions (a resumed run's).
+    earlier: (f64, f64),
+    checkpoint_slot: u64,
     dir: Option<&'a Path>,
     progress: ProgressSink,
     interrupt: Option<Arc<AtomicBool>>,
@@ -212,8 +295,10 @@ struct SpaceDriver<'a> {
 impl<'a> SpaceDriver<'a> {
     fn begin<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         scene: &'a SpaceScene,
+        dir: Option<&'a Path>,
         opts: &'a RunOptions,
         solver: &Solver<M, S, N>,
+        history: Option<History>,
     ) -> Self {
         let g = &scene.grid;
         let d = scene.runout_direction;
@@ -233,12 +318,20 @@ impl<'a> SpaceDriver<'a> {
             |_| y0,
         );
         let mass: f64 = p.mass.iter().sum();
-        let com0 =
-            p.position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<mpm_solver3d::Vector>()
-                / mass;
-        SpaceDriver {
+        // (from the generation positions: a resumed run's particles have moved)
+        let com0 = p
+            .initial_position
+            .iter()
+            .zip(&p.mass)
+            .map(|(x, m)| *x * *m)
+            .sum::<mpm_solver3d::Vector>()
+            / mass;
+        let mut d = SpaceDriver {
             scene,
-            dir: opts.out_dir.as_deref(),
+            session: (Instant::now(), solver.step_count()),
+            earlier: (0.0, 0.0),
+            checkpoint_slot: 0,
+            dir,
             progress: opts.progress.clone(),
             interrupt: opts.interrupt.clone(),
             stop_after: opts.stop_after,
@@ -260,6 +353,107 @@ impl<'a> SpaceDriver<'a> {
             dt: DtStats { min: f64::INFINITY, ..DtStats::default() },
             output_time: 0.0,
             wall_time: 0.0,
+        };
+        if let Some(h) = history {
+            d.energy = h.energy;
+            d.runout = h.runout;
+            d.frames = h.frames;
+            (d.frame_slot, d.series_slot, d.checkpoint_slot) =
+                (h.frame_slot, h.series_slot, h.checkpoint_slot);
+            d.dt = DtStats { min: h.dt_min, max: h.dt_max, first: h.dt_first, mean: 0.0 };
+            d.output_time = h.output_time;
+            d.earlier = (h.wall_time, h.particle_steps);
+            if let Some(c) = h.energy_check {
+                d.check = EnergyCheck {
+                    initial_scale: c.initial_scale,
+                    initial_potential: c.initial_potential,
+                    released: c.released,
+                    worst: c.worst,
+                    worst_time: c.worst_time,
+                };
+            }
+            d.alarm_time = h.alarm_time;
+            // the rest watch as the rows left it
+            let rows: Vec<(f64, f64)> =
+                d.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
+            for (t, kinetic) in rows {
+                d.watch_rest(t, kinetic);
+            }
+        }
+        d
+    }
+
+    /// the output history as a resumed run needs it, at this step.
+    fn history(&self, particles: usize, step: u64) -> History {
+        let (start, step0) = self.session;
+        let c = &self.check;
+        History {
+            energy: self.energy.clone(),
+            probes: Vec::new(),
+            runout: self.runout.clone(),
+            frames: self.frames.clone(),
+            frame_slot: self.frame_slot,
+            series_slot: self.series_slot,
+            checkpoint_slot: self.checkpoint_slot,
+            dt_min: self.dt.min,
+            dt_max: self.dt.max,
+            dt_first: self.dt.first,
+            wall_time: self.earlier.0 + start.elapsed().as_secs_f64(),
+            particle_steps: self.earlier.1 + (step - step0) as f64 * particles as f64,
+            output_time: self.output_time,
+            initial: self.runout.first().copied(),
+            energy_check: Some(mpm_solver::EnergyCheck {
+                initial_scale: c.initial_scale,
+                initial_potential: c.initial_potential,
+                released: c.released,
+                worst: c.worst,
+                worst_time: c.worst_time,
+            }),
+            alarm_time: self.alarm_time,
+            envelope: None,
+        }
+    }
+
+    /// writes `checkpoint.bin` (atomically): the solver state, the scene and the history.
+    fn write_checkpoint<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+        &self,
+        solver: &Solver<M, S, N>,
+    ) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        let file = CheckpointFile {
+            format: checkpoint::FORMAT,
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            origin: self.scene.origin().to_string(),
+            scene_text: self.scene.text().to_string(),
+            state: M::wrap_space(solver.checkpoint()),
+            history: self.history(solver.particles().len(), solver.step_count()),
+        };
+        Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
+    }
+
+    /// rewrites the series and the frame collection from the history (a resumed run's).
+    fn rewrite_outputs(&mut self) -> Result<(), RunError> {
+        let Some(dir) = self.dir else { return Ok(()) };
+        self.flushed = [0; 2];
+        self.flush()?;
+        if self.scene.output.vtk {
+            atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.frames).as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// `stop_at_rest`: the kinetic energy `kinetic` at time `t` against the run's peak.
+    fn watch_rest(&mut self, t: f64, kinetic: f64) {
+        if let Some(rest) = self.scene.stop_at_rest {
+            self.rest_peak = self.rest_peak.max(kinetic);
+            if self.rest_peak > 0.0 && kinetic <= rest.kinetic_fraction * self.rest_peak {
+                let since = *self.rest_since.get_or_insert(t);
+                if t - since >= rest.duration {
+                    self.stop.get_or_insert(Stop::AtRest);
+                }
+            } else {
+                self.rest_since = None;
+            }
         }
     }
 
@@ -318,17 +512,7 @@ impl<'a> SpaceDriver<'a> {
                 self.stop = Some(Stop::EnergyAlarm);
             }
         }
-        if let Some(rest) = self.scene.stop_at_rest {
-            self.rest_peak = self.rest_peak.max(l.kinetic);
-            if self.rest_peak > 0.0 && l.kinetic <= rest.kinetic_fraction * self.rest_peak {
-                let since = *self.rest_since.get_or_insert(t);
-                if t - since >= rest.duration {
-                    self.stop.get_or_insert(Stop::AtRest);
-                }
-            } else {
-                self.rest_since = None;
-            }
-        }
+        self.watch_rest(t, l.kinetic);
         self.energy.push(EnergyRow {
             time: t,
             step: solver.step_count(),
@@ -396,6 +580,11 @@ impl<'a> SpaceDriver<'a> {
         threads: usize,
     ) -> Result<RunSummary, RunError> {
         let t = solver.time();
+        // the checkpoint of an interrupted run holds the history as an uninterrupted run has it
+        // at this step (before the closing row and frame below)
+        if status == RunStatus::Interrupted {
+            self.write_checkpoint(solver)?;
+        }
         if self.energy.last().is_none_or(|row| row.time < t) {
             self.record(solver);
         }
@@ -423,6 +612,8 @@ impl<'a> SpaceDriver<'a> {
         let kinetic: Vec<(f64, f64)> =
             self.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
         let mut check = self.check;
+        let wall = self.earlier.0 + self.wall_time;
+        let particle_steps = self.earlier.1 + (steps - self.session.1) as f64 * n as f64;
         let summary = RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
             scene_origin: scene.origin().to_string(),
@@ -440,12 +631,8 @@ impl<'a> SpaceDriver<'a> {
                 mean: if steps > 0 { t / steps as f64 } else { 0.0 },
                 ..self.dt
             },
-            wall_time_s: self.wall_time,
-            particle_steps_per_s: if self.wall_time > 0.0 {
-                steps as f64 * n as f64 / self.wall_time
-            } else {
-                0.0
-            },
+            wall_time_s: wall,
+            particle_steps_per_s: if wall > 0.0 { particle_steps / wall } else { 0.0 },
             output_time_s: self.output_time,
             threads,
             energy: ledger(&solver.energy()),
@@ -503,10 +690,19 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         if report.step >= scene.max_steps && !mpm_solver3d::reached(t, scene.end_time) {
             self.stop.get_or_insert(Stop::StepLimit);
         }
+        if let Some(every) = scene.output.checkpoint_interval {
+            let c = slot(t, every);
+            if c > self.checkpoint_slot {
+                self.checkpoint_slot = c;
+                if let Err(e) = self.write_checkpoint(solver) {
+                    self.io_error = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
+        }
         let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
         if interrupted {
-            self.progress
-                .warn("interrupted: stopping after this step (3D runs write no checkpoint)");
+            self.progress.warn("interrupted: writing a checkpoint after this step");
         }
         if self.stop.is_some() || interrupted || self.stop_after.is_some_and(|s| t >= s) {
             return ControlFlow::Break(());

@@ -66,6 +66,8 @@ pub struct SpaceOutput {
     pub fields: Vec<VtkField>,
     /// whether PNG plots are drawn at the end.
     pub plots: bool,
+    /// simulated time between checkpoints (s); a checkpoint is also written on an interrupt.
+    pub checkpoint_interval: Option<f64>,
 }
 
 /// One 3D material point before the constitutive state is attached.

@@ -52,7 +52,7 @@ pub enum SolverError {
         reason: &'static str,
     },
     /// A particle given to the solver is inconsistent (non-positive mass, unknown material, ...).
-    #[error("particle {particle} at ({x}, {y}): {reason}", x = position.x, y = position.y)]
+    #[error("particle {particle} at {p}: {reason}", p = crate::math::At(*position))]
     InvalidParticle {
         /// particle index
         particle: usize,
@@ -65,7 +65,7 @@ pub enum SolverError {
     #[error("the scene has no particles")]
     NoParticles,
     /// A particle is outside the grid (at set-up, or it left the grid during the run).
-    #[error("step {step}: particle {particle} at ({x}, {y}) is outside the grid: {cause}", x = position.x, y = position.y)]
+    #[error("step {step}: particle {particle} at {p} is outside the grid: {cause}", p = crate::math::At(*position))]
     OutsideGrid {
         /// step at which it happened (0 = before the first step)
         step: u64,
@@ -77,7 +77,7 @@ pub enum SolverError {
         cause: LocateError,
     },
     /// A particle field became NaN or infinite.
-    #[error("step {step}: particle {particle} at ({x}, {y}) has a non-finite {field}", x = position.x, y = position.y)]
+    #[error("step {step}: particle {particle} at {p} has a non-finite {field}", p = crate::math::At(*position))]
     NonFinite {
         /// step at which it happened
         step: u64,
@@ -89,7 +89,7 @@ pub enum SolverError {
         field: Field,
     },
     /// A particle's volume became zero or negative (the material was turned inside out).
-    #[error("step {step}: particle {particle} at ({x}, {y}) inverted: volume ratio 1 + tr Δε = {ratio}", x = position.x, y = position.y)]
+    #[error("step {step}: particle {particle} at {p} inverted: volume ratio 1 + tr Δε = {ratio}", p = crate::math::At(*position))]
     Inverted {
         /// step at which it happened
         step: u64,
@@ -120,11 +120,10 @@ pub enum SolverError {
     /// With a fixed time step, gravity and the fastest particle's speed would carry it more than
     /// one cell in one step (nothing in eq 13 bounds that for a soft or stress-free material).
     #[error(
-        "step {step}: particle {particle} at ({x}, {y}) would move {cells:.3} cells in one step \
+        "step {step}: particle {particle} at {p} would move {cells:.3} cells in one step \
          (its speed and gravity): the fixed time step {dt:e} s is too large; use a \
          Courant-controlled step or a smaller dt",
-        x = position.x,
-        y = position.y
+        p = crate::math::At(*position)
     )]
     StepTooLong {
         /// step at which it happened
@@ -156,7 +155,7 @@ pub enum SolverError {
         relative_residual: f64,
     },
     /// The constitutive update refused its input.
-    #[error("step {step}: particle {particle} at ({x}, {y}): {source}", x = position.x, y = position.y)]
+    #[error("step {step}: particle {particle} at {p}: {source}", p = crate::math::At(*position))]
     Constitutive {
         /// step at which it happened
         step: u64,

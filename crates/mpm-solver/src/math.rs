@@ -32,6 +32,18 @@ pub type Matrix = glam::DMat3;
 #[cfg(feature = "dim3")]
 pub type Stress = mpm_constitutive::SymTensor;
 
+/// a point in messages: (x, y) in the plane, (x, y, z) in space, each with its full digits.
+pub(crate) struct At(pub(crate) Vector);
+
+impl std::fmt::Display for At {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        #[cfg(not(feature = "dim3"))]
+        return write!(f, "({}, {})", self.0.x, self.0.y);
+        #[cfg(feature = "dim3")]
+        return write!(f, "({}, {}, {})", self.0.x, self.0.y, self.0.z);
+    }
+}
+
 /// a ⊗ b, the matrix whose columns are a·b_x, a·b_y (, a·b_z): (a ⊗ b)_kl = a_k b_l.
 #[inline(always)]
 pub(crate) fn outer(a: Vector, b: Vector) -> Matrix {

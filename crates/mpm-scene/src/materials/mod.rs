@@ -28,6 +28,7 @@ use mpm_constitutive::{
     MAX_BRANCHES, MuI, PlaneTensor, SymTensor, Tangent, TangentModel, UpdateReport,
 };
 use mpm_solver::Checkpoint;
+use mpm_solver3d::Checkpoint as SpaceCheckpoint;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -39,6 +40,10 @@ pub trait SceneModel: TangentModel + Clone + std::fmt::Debug + 'static {
     fn wrap(c: Checkpoint<Self::State>) -> SavedState;
     /// unwraps a stored checkpoint of this model (`None` for another model).
     fn unwrap(s: SavedState) -> Option<Checkpoint<Self::State>>;
+    /// wraps a checkpoint of the 3D solver (`mpm-solver3d`) for storage.
+    fn wrap_space(c: SpaceCheckpoint<Self::State>) -> SavedState;
+    /// unwraps a stored 3D checkpoint of this model (`None` for another model or a 2D one).
+    fn unwrap_space(s: SavedState) -> Option<SpaceCheckpoint<Self::State>>;
 }
 
 /// A constitutive model a scene can name: `kind = KIND` in `[materials.NAME]`.
@@ -172,7 +177,7 @@ impl<const K: usize> BranchUnion<K> {
 macro_rules! registry {
     (
         models { $( $variant:ident($model:ty) ),* $(,)? }
-        states { $( $state:ident($run:ty) ),* $(,)? }
+        states { $( $state:ident / $space:ident ($run:ty) ),* $(,)? }
     ) => {
         /// One material of any registered model, built: what a `[materials.NAME]` table
         /// becomes, and the run type of a scene whose bodies use materials of several models
@@ -523,6 +528,10 @@ macro_rules! registry {
                 #[doc = concat!("a run of `", stringify!($run), "`.")]
                 $state(Checkpoint<<$run as ConstitutiveModel>::State>),
             )*
+            $(
+                #[doc = concat!("a 3D run of `", stringify!($run), "`.")]
+                $space(SpaceCheckpoint<<$run as ConstitutiveModel>::State>),
+            )*
         }
 
         impl SavedState {
@@ -530,6 +539,15 @@ macro_rules! registry {
             pub fn clock(&self) -> (f64, u64, usize) {
                 match self {
                     $( SavedState::$state(c) => (c.time, c.step, c.particles.len()), )*
+                    $( SavedState::$space(c) => (c.time, c.step, c.particles.len()), )*
+                }
+            }
+
+            /// the dimension of the run the state belongs to (2 or 3).
+            pub fn dimension(&self) -> u8 {
+                match self {
+                    $( SavedState::$state(_) => 2, )*
+                    $( SavedState::$space(_) => 3, )*
                 }
             }
         }
@@ -548,6 +566,19 @@ macro_rules! registry {
                         _ => None,
                     }
                 }
+                fn wrap_space(
+                    c: SpaceCheckpoint<<$run as ConstitutiveModel>::State>,
+                ) -> SavedState {
+                    SavedState::$space(c)
+                }
+                fn unwrap_space(
+                    s: SavedState,
+                ) -> Option<SpaceCheckpoint<<$run as ConstitutiveModel>::State>> {
+                    match s {
+                        SavedState::$space(c) => Some(c),
+                        _ => None,
+                    }
+                }
             }
         )*
     };
@@ -559,12 +590,13 @@ registry! {
         DruckerPrager(DruckerPrager),
         MuI(MuI),
     }
+    // (2D variant / 3D variant: the 3D ones follow all the 2D ones in checkpoint files)
     states {
-        Elastic(LinearElastic),
-        Plastic(DruckerPrager),
-        PerfectlyPlastic(DruckerPrager<DpPerfectState>),
-        MuI(MuI),
-        Mixed(AnyModel),
+        Elastic / SpaceElastic (LinearElastic),
+        Plastic / SpacePlastic (DruckerPrager),
+        PerfectlyPlastic / SpacePerfectlyPlastic (DruckerPrager<DpPerfectState>),
+        MuI / SpaceMuI (MuI),
+        Mixed / SpaceMixed (AnyModel),
     }
 }
 

@@ -17,8 +17,8 @@ use mpm_solver3d::{
 use super::{Ctx, bodies, boundaries, finite_pos, materials, num, serde_error, solver};
 use crate::error::SceneError;
 use crate::file::{
-    Axis, BoundarySpec, GridKind, ShapeFunctionKind, SpaceBodySpec, SpaceFile, SpaceShapeKind,
-    VtkField,
+    Axis, BoundarySpec, GridKind, ShapeFunctionKind, SolverSpec, SpaceBodySpec, SpaceFile,
+    SpaceShapeKind, VtkField,
 };
 use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
 use crate::materials::MaterialsBuilt;
@@ -38,8 +38,9 @@ pub fn load_space_str(text: &str, origin: &str) -> Result<SpaceScene, SceneError
 }
 
 fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneError> {
-    let settings = solver::settings(ctx, &f.solver)?;
     let gravity = gravity(ctx, &f)?;
+    // the settings the dimensions share (gravity, 3 components here, was read above)
+    let settings = solver::settings(ctx, &SolverSpec { gravity: None, ..f.solver.clone() })?;
     let grid = grid(ctx, &f)?;
     let shape_function = f
         .solver
@@ -559,16 +560,26 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         ("output.reference", o.reference.is_some()),
         ("output.envelope", o.envelope == Some(true)),
         ("output.observed", o.observed.is_some()),
-        ("output.checkpoint_interval", o.checkpoint_interval.is_some()),
     ];
     if let Some((path, _)) = refused.iter().find(|(_, here)| *here) {
         return Err(ctx.err(
             path,
             None,
             "this output is not available in 3D scenes yet",
-            "interval, series_interval, fields, vtk, vtk_format, plots",
-            "remove it (3D runs write frames, energy.csv, runout.csv and summary.json)",
+            "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots",
+            "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
+             summary.json)",
         ));
+    }
+    if let Some(c) = o.checkpoint_interval {
+        if !finite_pos(c) {
+            return Err(ctx.range(
+                "output.checkpoint_interval",
+                c,
+                "0 < checkpoint_interval (s of simulated time)",
+                "give the simulated time between checkpoints, or remove it",
+            ));
+        }
     }
     let end = f.solver.end_time;
     let interval = o.interval.unwrap_or(end / 50.0);
@@ -590,5 +601,6 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         vtk_format: o.vtk_format.unwrap_or_default(),
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
         plots: o.plots.unwrap_or(true),
+        checkpoint_interval: o.checkpoint_interval,
     })
 }
