@@ -12,6 +12,8 @@
 //! - [`free_fall`]: momentum m g t to round-off.
 //! - [`collapse_bits`]: a Drucker-Prager column collapsing on a rough floor, its state's bits
 //!   for a given number of threads.
+//! - [`vibrating_bar`]: the fixed–free bar along z, its period against 2π/ω.
+//! - [`bagnold`]: steady μ(I) flow on a periodic 3D strip against Bagnold's profile.
 
 use mpm_constitutive::{
     ConeMatch, ConstitutiveError, ConstitutiveModel, DruckerPrager, DruckerPragerParams,
@@ -433,4 +435,178 @@ pub fn collapse_bits(steps: u64) -> Result<(usize, Vec<u64>), CaseError> {
         bits.extend(p.stress[i].to_array().map(f64::to_bits));
     }
     Ok((count, bits))
+}
+
+/// What the 3D vibrating bar measured over five periods.
+#[derive(Clone, Debug, Default)]
+pub struct Bar {
+    /// measured period / exact period (NaN with fewer than two zero crossings)
+    pub period_ratio: f64,
+    /// largest |E(t) − E0| / E0
+    pub worst_energy: f64,
+    /// zero crossings of the mean velocity seen (ten expected in five periods)
+    pub crossings: usize,
+    /// steps and particles
+    pub steps: u64,
+    /// particles
+    pub particles: usize,
+}
+
+/// The vibrating bar of [`crate::bar`] (fixed–free, L = 25 m, c = 10 m/s, T = 10 s) along the
+/// grid's z axis, the axis the plane-strain solver does not have: one cell square in x and y,
+/// fixed to the back wall (z = 0), ν = 0 so that it is one-dimensional, run for five periods
+/// with the numerics `n` (its cell, scheme, transfer, shape functions and Courant number).
+pub fn vibrating_bar(n: &Numerics) -> Result<Bar, CaseError> {
+    use crate::bar::{E, L, RHO, V0, period};
+    let cell = n.cell;
+    // one cell of material between two empty ones in x and y (the stencils' reach), 28 m in z
+    let grid = RegularGrid::new(
+        Vector::new(-cell, -cell, 0.0),
+        Vector::splat(cell),
+        [3, 3, (28.0 / cell).round() as usize],
+    )
+    .map_err(setup)?;
+    let material = LinearElastic::from_young_poisson(E, 0.0).map_err(setup)?;
+    let beta = std::f64::consts::PI / (2.0 * L);
+    let mut particles = block(
+        &Shape::Box { min: Vector::ZERO, max: Vector::new(cell, cell, L) },
+        cell,
+        n.ppc,
+        RHO,
+        Vector::ZERO,
+        (),
+    );
+    for (v, x) in particles.velocity.iter_mut().zip(&particles.position) {
+        *v = Vector::new(0.0, 0.0, V0 * (beta * x.z).sin());
+    }
+    let config = SolverConfig {
+        scheme: n.scheme,
+        transfer: n.transfer,
+        time_step: TimeStep::Courant(n.courant),
+        gravity: Vector::ZERO,
+        boundaries: Boundaries { back_wall: Some(Friction::Fixed), ..Default::default() },
+        ..Default::default()
+    };
+    /// the bar as a job over the shape functions.
+    struct OnShape(LinearElastic, Particles<()>, SolverConfig, f64);
+    impl ShapeJob for OnShape {
+        type Output = Result<Bar, SolverError>;
+        fn run<S: ShapeFunctions<N>, const N: usize>(self, shape: S) -> Self::Output {
+            let OnShape(material, particles, config, period) = self;
+            let mut s = Solver::new(shape, vec![material], particles, config)?;
+            let e0 = s.energy().total();
+            let mut worst: f64 = 0.0;
+            let mut crossings = Vec::new();
+            let mut last = (0.0, mass_mean(s.particles(), &s.particles().velocity).z);
+            while s.time() < 5.0 * period {
+                s.step()?;
+                let v = mass_mean(s.particles(), &s.particles().velocity).z;
+                if (v > 0.0) != (last.1 > 0.0) {
+                    // the zero of the mean velocity within the step, linearly interpolated
+                    crossings.push(last.0 + (s.time() - last.0) * last.1 / (last.1 - v));
+                }
+                last = (s.time(), v);
+                worst = worst.max((s.energy().total() - e0).abs() / e0);
+            }
+            // successive zero crossings of cos ωt are half a period apart
+            let k = crossings.len();
+            let period_ratio = if k >= 2 {
+                2.0 * (crossings[k - 1] - crossings[0]) / (k - 1) as f64 / period
+            } else {
+                f64::NAN
+            };
+            Ok(Bar {
+                period_ratio,
+                worst_energy: worst,
+                crossings: k,
+                steps: s.step_count(),
+                particles: s.particles().len(),
+            })
+        }
+    }
+    let job = OnShape(material, particles, config, period());
+    Ok(with_regular_shape(n.shape, grid, n.ppc, job).map_err(setup)??)
+}
+
+/// What the 3D Bagnold flow measured at the end of the run (as [`crate::open_core::Bagnold`]).
+pub type Bagnold = crate::open_core::Bagnold;
+
+/// Steady flow of a μ(I) layer down a rough 24° plane, in 3D: the case of
+/// [`crate::open_core::bagnold`] (glass beads, depth 8 mm over `cells` cells, a periodic strip
+/// 4 cells long in x, gravity turned by θ in the x–y plane, a no-slip base, APIC, MUSL, a
+/// gravity ramp of 0.05 s) two cells wide in z between frictionless back and front walls,
+/// 2 × 2 × 2 particles per cell, run from rest for `end` seconds: each layer's mean speed
+/// against Bagnold's profile u(z) = (2 I_θ / 3d) √(φ g cos θ) (h^{3/2} − (h − z)^{3/2}).
+pub fn bagnold(kind: RegularShape, cells: usize, end: f64) -> Result<Bagnold, CaseError> {
+    use crate::open_core::{SOLID_FRACTION, bagnold_velocity, glass_beads};
+    let (depth, theta, columns, width) = (8e-3, 24.0f64, 4u32, 2u32);
+    let cell = depth / cells as f64;
+    let grid = RegularGrid::new(
+        Vector::ZERO,
+        Vector::splat(cell),
+        [columns as usize, cells + 4, width as usize],
+    )
+    .map_err(setup)?;
+    let m = glass_beads()?;
+    let density = SOLID_FRACTION * m.params().grain_density;
+    let length = f64::from(columns) * cell;
+    let body =
+        Shape::Box { min: Vector::ZERO, max: Vector::new(length, depth, f64::from(width) * cell) };
+    let particles = block(&body, cell, 2, density, Vector::ZERO, m.initial_state());
+    let t = theta.to_radians();
+    let config = SolverConfig {
+        scheme: Scheme::Musl,
+        transfer: Transfer::Apic,
+        time_step: TimeStep::Courant(0.5),
+        gravity: STANDARD_GRAVITY * Vector::new(t.sin(), -t.cos(), 0.0),
+        boundaries: Boundaries {
+            ground: Some(Friction::Rough),
+            back_wall: Some(Friction::Coulomb { mu: 0.0 }),
+            front_wall: Some(Friction::Coulomb { mu: 0.0 }),
+            ..Default::default()
+        },
+        periodic: Some(mpm_solver3d::Periodic { x_min: 0.0, columns, length }),
+        gravity_ramp: 0.05,
+        ..Default::default()
+    };
+    // each particle's layer: 2 per cell, counted from the base
+    let layers = 2 * cells;
+    let layer: Vec<usize> = particles
+        .position
+        .iter()
+        .map(|x| ((x.y / (0.5 * cell)).floor() as usize).min(layers - 1))
+        .collect();
+    let count = particles.len();
+    // (mean height, mean x velocity) of each layer at 3/4 of the run and at its end
+    let mut means: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut sample = |_t: f64, p: &Particles<mpm_constitutive::MuIState>| {
+        let mut sum = vec![(0.0, 0.0, 0usize); layers];
+        for ((x, v), &k) in p.position.iter().zip(&p.velocity).zip(&layer) {
+            sum[k].0 += x.y;
+            sum[k].1 += v.x;
+            sum[k].2 += 1;
+        }
+        means.push(
+            sum.into_iter().map(|(z, u, n)| (z / n.max(1) as f64, u / n.max(1) as f64)).collect(),
+        );
+    };
+    let n = Numerics {
+        cell,
+        ppc: 2,
+        scheme: Scheme::Musl,
+        transfer: Transfer::Apic,
+        shape: kind,
+        courant: 0.5,
+    };
+    let steps = run(grid, &n, m, particles, config, &[0.75 * end, end], &mut sample)?;
+    let surface = bagnold_velocity(&m, theta, depth, depth);
+    let (mut worst, mut change) = (0.0f64, 0.0f64);
+    let mut profile = Vec::new();
+    for (&(z, u), &(_, u_late)) in means[1].iter().zip(&means[0]) {
+        let exact = bagnold_velocity(&m, theta, depth, z);
+        worst = worst.max((u - exact).abs() / surface);
+        change = change.max((u - u_late).abs() / surface);
+        profile.push((z, u, exact));
+    }
+    Ok(Bagnold { profile, worst, change, cells, steps, particles: count })
 }

@@ -74,7 +74,7 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
 #[pyclass(module = "granular_mpm._native", name = "Scene", frozen)]
 #[derive(Clone)]
 struct Scene {
-    inner: mpm_run::Scene,
+    inner: mpm_run::AnyScene,
 }
 
 #[pymethods]
@@ -82,7 +82,7 @@ impl Scene {
     /// loads and validates a scene file; files it names (DEMs, polylines) are relative to it.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
-        mpm_run::load_scene_file(&path)
+        mpm_run::load_any_scene_file(&path)
             .map(|inner| Scene { inner })
             .map_err(|e| scene_error(py, &e))
     }
@@ -91,7 +91,7 @@ impl Scene {
     #[staticmethod]
     #[pyo3(signature = (text, name = "<string>"))]
     fn from_str(py: Python<'_>, text: &str, name: &str) -> PyResult<Scene> {
-        mpm_run::load_scene_str(text, name)
+        mpm_run::AnyScene::from_str(text, name)
             .map(|inner| Scene { inner })
             .map_err(|e| scene_error(py, &e))
     }
@@ -107,7 +107,7 @@ impl Scene {
                 names.join(", ")
             )));
         };
-        mpm_run::load_scene_str(text, &format!("embedded:{name}"))
+        mpm_run::AnyScene::from_str(text, &format!("embedded:{name}"))
             .map(|inner| Scene { inner })
             .map_err(|e| scene_error(py, &e))
     }
@@ -160,19 +160,30 @@ impl Scene {
     /// the materials' names, in the order particles' `material` numbers them.
     #[getter]
     fn materials(&self) -> Vec<String> {
-        self.inner.resolved().material_names.clone()
+        self.inner.material_names().to_vec()
     }
 
     /// `mpm check`: the full validation and estimates, as JSON text.
     fn check_json(&self, py: Python<'_>) -> PyResult<String> {
-        let report = mpm_run::check_scene(&self.inner).map_err(|e| run_error(py, e))?;
+        let report = match &self.inner {
+            mpm_run::AnyScene::Plane(s) => mpm_run::check_scene(s),
+            mpm_run::AnyScene::Space(s) => mpm_run::check_space_scene(s),
+        }
+        .map_err(|e| run_error(py, e))?;
         serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    /// 2 for a plane-strain scene, 3 for a 3D one (`[grid] dimension`).
+    #[getter]
+    fn dimension(&self) -> u8 {
+        self.inner.dimension()
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "Scene({:?}, {} particles, end_time {} s)",
+            "Scene({:?}, {}D, {} particles, end_time {} s)",
             self.inner.origin(),
+            self.inner.dimension(),
             self.inner.particle_count(),
             self.inner.end_time()
         )
@@ -323,7 +334,10 @@ fn run(
 ) -> PyResult<Ran> {
     let options = RunOptions { out_dir: out, threads, force, ..Default::default() };
     let scene = &scene.inner;
-    drive(py, progress, options, |opts| mpm_run::run_scene(scene, opts))
+    drive(py, progress, options, |opts| match scene {
+        mpm_run::AnyScene::Plane(s) => mpm_run::run_scene(s, opts),
+        mpm_run::AnyScene::Space(s) => mpm_run::run_space_scene(s, opts),
+    })
 }
 
 /// continues the run in `out` from its checkpoint (see `granular_mpm.resume`).
@@ -410,7 +424,12 @@ impl Simulation {
     #[pyo3(signature = (scene, threads = None))]
     fn new(py: Python<'_>, scene: &Scene, threads: Option<usize>) -> PyResult<Simulation> {
         let mut waiter = Waiter::new(None);
-        let scene = &scene.inner;
+        let mpm_run::AnyScene::Plane(scene) = &scene.inner else {
+            return Err(PyValueError::new_err(
+                "a 3D scene: step-by-step runs (Simulation) are 2D only for now; run it with \
+                 granular_mpm.run (which writes its frames, series and checkpoints)",
+            ));
+        };
         let result = py.detach(|| mpm_run::Simulation::new(scene, threads, &mut || waiter.poll()));
         if let Some(e) = waiter.pending.take() {
             return Err(e);

@@ -98,7 +98,7 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
 }
 
 /// Runs a 3D scene to its end time (see [`RunOptions`]; `stop_after` and `interrupt` stop it
-/// without a checkpoint). Returns the summary of a completed, stopped or interrupted run; a
+/// after a step with a checkpoint that `mpm resume` continues). Returns the summary of a completed, stopped or interrupted run; a
 /// solver instability returns [`RunError::Solver`] after writing the files reached so far.
 pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let _lock = match &opts.out_dir {

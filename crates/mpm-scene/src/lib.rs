@@ -84,6 +84,88 @@ pub enum AnyScene {
     Space(Box<SpaceScene>),
 }
 
+impl AnyScene {
+    /// validates a scene text, 2D or 3D as its `[grid] dimension` says; `origin` is how
+    /// messages name it (files a 2D scene names are relative to the working directory).
+    pub fn from_str(text: &str, origin: &str) -> Result<AnyScene, SceneError> {
+        Ok(if declared_dimension(text) == 3 {
+            AnyScene::Space(Box::new(load_space_str(text, origin)?))
+        } else {
+            AnyScene::Plane(Box::new(load_scene_str(text, origin)?))
+        })
+    }
+
+    /// 2 or 3.
+    pub fn dimension(&self) -> u8 {
+        match self {
+            AnyScene::Plane(_) => 2,
+            AnyScene::Space(_) => 3,
+        }
+    }
+
+    /// where the text came from (a path, `embedded:NAME` or the name given).
+    pub fn origin(&self) -> &str {
+        match self {
+            AnyScene::Plane(s) => s.origin(),
+            AnyScene::Space(s) => s.origin(),
+        }
+    }
+
+    /// the scene's text.
+    pub fn text(&self) -> &str {
+        match self {
+            AnyScene::Plane(s) => s.text(),
+            AnyScene::Space(s) => s.text(),
+        }
+    }
+
+    /// a stable hash of the scene text (FNV-1a 64, hex), as `summary.json` names it.
+    pub fn hash(&self) -> String {
+        format!("{:016x}", fnv1a(self.text().as_bytes()))
+    }
+
+    /// number of particles the scene generates.
+    pub fn particle_count(&self) -> usize {
+        match self {
+            AnyScene::Plane(s) => s.particle_count(),
+            AnyScene::Space(s) => s.particle_count(),
+        }
+    }
+
+    /// simulated end time (s).
+    pub fn end_time(&self) -> f64 {
+        match self {
+            AnyScene::Plane(s) => s.end_time(),
+            AnyScene::Space(s) => s.end_time,
+        }
+    }
+
+    /// the Δt of the first step (s).
+    pub fn initial_dt(&self) -> f64 {
+        match self {
+            AnyScene::Plane(s) => s.initial_dt(),
+            AnyScene::Space(s) => s.initial_dt,
+        }
+    }
+
+    /// the materials' names, in the order particles' `material` numbers them.
+    pub fn material_names(&self) -> &[String] {
+        match self {
+            AnyScene::Plane(s) => &s.resolved().material_names,
+            AnyScene::Space(s) => &s.material_names,
+        }
+    }
+
+    /// the same scene with the field at `path` set to `value`, validated again
+    /// ([`Scene::with_value`]).
+    pub fn with_value(&self, path: &str, value: &str) -> Result<AnyScene, SceneError> {
+        Ok(match self {
+            AnyScene::Plane(s) => AnyScene::Plane(Box::new(s.with_value(path, value)?)),
+            AnyScene::Space(s) => AnyScene::Space(Box::new(s.with_value(path, value)?)),
+        })
+    }
+}
+
 /// Reads and validates the scene file at `path`, 2D or 3D as its `[grid] dimension` says
 /// ([`declared_dimension`]); refusals as [`load_scene_file`]'s.
 pub fn load_any_scene_file(path: &std::path::Path) -> Result<AnyScene, SceneError> {

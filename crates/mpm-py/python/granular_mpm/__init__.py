@@ -153,6 +153,11 @@ class Scene:
         return self._native.origin
 
     @property
+    def dimension(self) -> int:
+        """2 for a plane-strain scene, 3 for a 3D one (``[grid] dimension = 3``)."""
+        return self._native.dimension
+
+    @property
     def particle_count(self) -> int:
         """Particles the scene generates."""
         return self._native.particle_count

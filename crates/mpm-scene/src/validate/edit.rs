@@ -4,9 +4,10 @@
 
 use toml_edit::{DocumentMut, Item, Value};
 
-use super::load;
+use super::{load, load_space_str};
 use crate::error::SceneError;
 use crate::scene::Scene;
+use crate::space::SpaceScene;
 
 /// One step of a field path: a key of a table, or an index into an array (of tables).
 #[derive(Debug, PartialEq)]
@@ -57,42 +58,60 @@ impl Scene {
     /// assert_eq!(e.path, "materials.sand.friction_angle_deg");
     /// ```
     pub fn with_value(&self, path: &str, value: &str) -> Result<Scene, SceneError> {
-        let refuse = |problem: String, fix: &str| SceneError {
-            origin: self.origin.clone(),
-            line: None,
-            column: None,
-            path: path.to_string(),
-            value: Some(value.to_string()),
-            problem,
-            admissible: String::new(),
-            fix: fix.to_string(),
-        };
-        let Some(steps) = steps(path) else {
-            return Err(refuse(
-                "not a field path".into(),
-                "name the field as in the scene file, its tables joined by dots and array \
-                 elements by their index: `materials.sand.friction_angle_deg`, `bodies[0].min`",
-            ));
-        };
-        let new = parse_value(value).ok_or_else(|| {
-            refuse(
-                "not a TOML value".into(),
-                "write the value as in a scene file: 35.0, \"musl\", true, [0.0, 1.2], \
-                 { kind = \"coulomb\", friction_deg = 20.0 }",
-            )
-        })?;
-        let mut doc: DocumentMut = self.text.parse().map_err(|e| {
-            refuse(format!("the scene's text cannot be edited: {e}"), "load the scene again")
-        })?;
-        set(doc.as_item_mut(), &steps, new).map_err(|why| {
-            refuse(why, "name a field of the scene format (docs/scene-format.md)")
-        })?;
+        let text = edited(&self.text, &self.origin, path, value)?;
         let origin = format!("{} (with {path} = {value})", self.origin);
-        load(&doc.to_string(), &origin, self.dir.as_deref()).map(|mut scene| {
+        load(&text, &origin, self.dir.as_deref()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })
     }
+}
+
+impl SpaceScene {
+    /// the same 3D scene with the field at `path` set to `value`, validated again (as
+    /// [`Scene::with_value`]).
+    pub fn with_value(&self, path: &str, value: &str) -> Result<SpaceScene, SceneError> {
+        let text = edited(&self.text, &self.origin, path, value)?;
+        let origin = format!("{} (with {path} = {value})", self.origin);
+        load_space_str(&text, &origin).map(|mut scene| {
+            scene.origin = self.origin.clone();
+            scene
+        })
+    }
+}
+
+/// `text` with the field at `path` set to `value` (comments and layout kept), or why not.
+fn edited(text: &str, origin: &str, path: &str, value: &str) -> Result<String, SceneError> {
+    let refuse = |problem: String, fix: &str| SceneError {
+        origin: origin.to_string(),
+        line: None,
+        column: None,
+        path: path.to_string(),
+        value: Some(value.to_string()),
+        problem,
+        admissible: String::new(),
+        fix: fix.to_string(),
+    };
+    let Some(steps) = steps(path) else {
+        return Err(refuse(
+            "not a field path".into(),
+            "name the field as in the scene file, its tables joined by dots and array \
+             elements by their index: `materials.sand.friction_angle_deg`, `bodies[0].min`",
+        ));
+    };
+    let new = parse_value(value).ok_or_else(|| {
+        refuse(
+            "not a TOML value".into(),
+            "write the value as in a scene file: 35.0, \"musl\", true, [0.0, 1.2], \
+             { kind = \"coulomb\", friction_deg = 20.0 }",
+        )
+    })?;
+    let mut doc: DocumentMut = text.parse().map_err(|e| {
+        refuse(format!("the scene's text cannot be edited: {e}"), "load the scene again")
+    })?;
+    set(doc.as_item_mut(), &steps, new)
+        .map_err(|why| refuse(why, "name a field of the scene format (docs/scene-format.md)"))?;
+    Ok(doc.to_string())
 }
 
 /// a TOML value written alone.
