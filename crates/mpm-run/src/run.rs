@@ -272,20 +272,32 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
 /// those of a run of it), if it cannot.
 fn fits_its_scene(c: &CheckpointFile, scene: &Scene) -> Result<(), String> {
     let r = scene.resolved();
+    fits(c, r.end_time, r.max_steps, r.seeds.len(), r.output.probes.len())
+}
+
+/// why checkpoint `c` cannot continue a run of a scene of this end time, step limit, particle
+/// count and number of probes, if it cannot (2D and 3D runs alike).
+pub(crate) fn fits(
+    c: &CheckpointFile,
+    end_time: f64,
+    max_steps: u64,
+    seeds: usize,
+    probes: usize,
+) -> Result<(), String> {
     let (time, step, particles) = c.state.clock();
-    if !(time.is_finite() && (0.0..=r.end_time).contains(&time)) {
-        return Err(format!("time {time:e} s is not between 0 and end_time = {} s", r.end_time));
+    if !(time.is_finite() && (0.0..=end_time).contains(&time)) {
+        return Err(format!("time {time:e} s is not between 0 and end_time = {end_time} s"));
     }
-    if step > r.max_steps {
-        return Err(format!("step {step} is above max_steps = {}", r.max_steps));
+    if step > max_steps {
+        return Err(format!("step {step} is above max_steps = {max_steps}"));
     }
-    if particles != r.seeds.len() {
-        return Err(format!("{particles} particles, but its scene generates {}", r.seeds.len()));
+    if particles != seeds {
+        return Err(format!("{particles} particles, but its scene generates {seeds}"));
     }
     // At most one row and one frame per step, besides those of t = 0.
     let h = &c.history;
     let rows = step.saturating_add(1);
-    let probes = rows.saturating_mul(r.output.probes.len() as u64);
+    let probes = rows.saturating_mul(probes as u64);
     for (what, n, most) in [
         ("energy rows", h.energy.len() as u64, rows),
         ("runout rows", h.runout.len() as u64, rows),

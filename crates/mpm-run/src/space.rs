@@ -133,34 +133,7 @@ pub(crate) fn resume_space(
     if c.state.dimension() != 3 {
         return Err(refuse("its scene is a 3D scene but its state is a 2D run's".into()));
     }
-    let (time, step, particles) = c.state.clock();
-    if !(time.is_finite() && (0.0..=scene.end_time).contains(&time)) {
-        return Err(refuse(format!(
-            "time {time:e} s is not between 0 and end_time = {} s",
-            scene.end_time
-        )));
-    }
-    if step > scene.max_steps {
-        return Err(refuse(format!("step {step} is above max_steps = {}", scene.max_steps)));
-    }
-    if particles != scene.seeds.len() {
-        return Err(refuse(format!(
-            "{particles} particles, but its scene generates {}",
-            scene.seeds.len()
-        )));
-    }
-    // at most one row and one frame per step, besides those of t = 0
-    let h = &c.history;
-    let rows = step.saturating_add(1);
-    for (what, n) in [
-        ("energy rows", h.energy.len()),
-        ("runout rows", h.runout.len()),
-        ("frames", h.frames.len()),
-    ] {
-        if n as u64 > rows {
-            return Err(refuse(format!("{n} {what} after {step} steps (at most {rows})")));
-        }
-    }
+    crate::run::fits(&c, scene.end_time, scene.max_steps, scene.seeds.len(), 0).map_err(refuse)?;
     let resume = Some((c.state, c.history));
     with_pool(opts, scene.seeds.len(), |threads| {
         let run = SpaceRun { opts, threads, resume, dir: Some(dir.to_path_buf()) };
