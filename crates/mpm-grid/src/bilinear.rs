@@ -14,6 +14,8 @@
 //! [`QuadraticBSpline`](crate::QuadraticBSpline) remove.
 
 use crate::error::LocateError;
+#[cfg(feature = "dim3")]
+use crate::math::Matrix;
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
@@ -162,6 +164,29 @@ impl ShapeFunctions<8> for Bilinear<RegularGrid> {
         })
     }
 
+    #[inline(always)]
+    fn interpolate(&self, f: &[f64; 3], value: impl Fn(usize) -> Vector) -> (Vector, Matrix) {
+        crate::tensor::interpolate(&hats(f), self.0.inverse_cell_size(), value)
+    }
+
+    #[inline(always)]
+    fn gradient(&self, f: &[f64; 3], value: impl Fn(usize) -> Vector) -> Matrix {
+        crate::tensor::interpolate(&hats(f), self.0.inverse_cell_size(), value).1
+    }
+
+    #[inline(always)]
+    fn nodal_forces(
+        &self,
+        f: &[f64; 3],
+        _weights: &[f64; 8],
+        (mass, body): (f64, Vector),
+        volume: f64,
+        stress: [Vector; 3],
+    ) -> [Vector; 8] {
+        let columns = crate::tensor::scaled_columns(volume, stress, self.0.inverse_cell_size());
+        crate::tensor::forces(&hats(f), mass * body, columns)
+    }
+
     fn node_position(&self, node: NodeId) -> Vector {
         self.0.node_position(node)
     }
@@ -173,4 +198,11 @@ impl ShapeFunctions<8> for Bilinear<RegularGrid> {
     fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
         self.0.boundary_normals(node)
     }
+}
+
+/// the 1D hats' (weight, slope per cell unit) pairs along each axis at fractions (a, b, c).
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn hats(f: &[f64; 3]) -> crate::tensor::Axes<2> {
+    f.map(|t| [(1.0 - t, -1.0), (t, 1.0)])
 }

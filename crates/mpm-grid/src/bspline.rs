@@ -24,7 +24,9 @@
 //! - units SI (m).
 
 use crate::error::LocateError;
-use crate::gimp::{AxisFactors, WIDE};
+use crate::gimp::{AxisFactors, WIDE, factorised_sums};
+#[cfg(feature = "dim3")]
+use crate::math::DIM;
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, NodeId};
 use crate::regular::RegularGrid;
@@ -79,6 +81,8 @@ impl ShapeFunctions<WIDE> for QuadraticBSpline {
     fn gradients(&self, f: &AxisFactors) -> [Vector; WIDE] {
         f.gradients(self.grid.inverse_cell_size())
     }
+
+    factorised_sums!();
 
     fn node_position(&self, node: NodeId) -> Vector {
         self.grid.node_position(node)

@@ -223,6 +223,68 @@ impl AxisFactors {
     }
 }
 
+/// the sums of [`ShapeFunctions::interpolate`], [`ShapeFunctions::gradient`] and
+/// [`ShapeFunctions::nodal_forces`] factorised per axis (`tensor.rs`), for the 3D uGIMP and
+/// B-spline stencils alike.
+#[cfg(feature = "dim3")]
+impl AxisFactors {
+    #[inline(always)]
+    pub(crate) fn interpolate(
+        &self,
+        inv_cell: Vector,
+        value: impl Fn(usize) -> Vector,
+    ) -> (Vector, crate::Matrix) {
+        crate::tensor::interpolate(&[self.x, self.y, self.z], inv_cell, value)
+    }
+
+    #[inline(always)]
+    pub(crate) fn nodal_forces(
+        &self,
+        inv_cell: Vector,
+        (mass, body): (f64, Vector),
+        volume: f64,
+        stress: [Vector; DIM],
+    ) -> [Vector; WIDE] {
+        let columns = crate::tensor::scaled_columns(volume, stress, inv_cell);
+        crate::tensor::forces(&[self.x, self.y, self.z], mass * body, columns)
+    }
+}
+
+/// The overrides of the per-axis sums (3D) in the `ShapeFunctions` impls of uGIMP and B-splines.
+macro_rules! factorised_sums {
+    () => {
+        #[cfg(feature = "dim3")]
+        #[inline(always)]
+        fn interpolate(
+            &self,
+            f: &AxisFactors,
+            value: impl Fn(usize) -> Vector,
+        ) -> (Vector, crate::Matrix) {
+            f.interpolate(self.grid.inverse_cell_size(), value)
+        }
+
+        #[cfg(feature = "dim3")]
+        #[inline(always)]
+        fn gradient(&self, f: &AxisFactors, value: impl Fn(usize) -> Vector) -> crate::Matrix {
+            f.interpolate(self.grid.inverse_cell_size(), value).1
+        }
+
+        #[cfg(feature = "dim3")]
+        #[inline(always)]
+        fn nodal_forces(
+            &self,
+            f: &AxisFactors,
+            _weights: &[f64; WIDE],
+            mass_body: (f64, Vector),
+            volume: f64,
+            stress: [Vector; DIM],
+        ) -> [Vector; WIDE] {
+            f.nodal_forces(self.grid.inverse_cell_size(), mass_body, volume, stress)
+        }
+    };
+}
+pub(crate) use factorised_sums;
+
 impl ShapeFunctions<WIDE> for Gimp {
     type Factors = AxisFactors;
 
@@ -251,6 +313,8 @@ impl ShapeFunctions<WIDE> for Gimp {
     fn gradients(&self, f: &AxisFactors) -> [Vector; WIDE] {
         f.gradients(self.grid.inverse_cell_size())
     }
+
+    factorised_sums!();
 
     fn node_position(&self, node: NodeId) -> Vector {
         self.grid.node_position(node)

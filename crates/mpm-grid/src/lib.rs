@@ -61,6 +61,8 @@ mod regular;
 #[cfg(not(feature = "dim3"))]
 mod skewed_cell;
 mod stencil;
+#[cfg(feature = "dim3")]
+mod tensor;
 #[cfg(not(feature = "dim3"))]
 mod terrain;
 

@@ -1,7 +1,7 @@
 //! The fixed-size stencil of a point and the one interface over every grid + shape-function pair.
 
 use crate::error::LocateError;
-use crate::math::{DIM, Vector};
+use crate::math::{DIM, Matrix, Vector};
 use crate::node::{BoundaryNormals, NodeId};
 
 /// Fixed-size stencil: the nodes whose support contains a point, with weights N_i(x) and
@@ -84,6 +84,58 @@ pub trait ShapeFunctions<const N: usize>: Send + Sync {
     /// ∇N_i(x) (1/m) in slot order, from the factors `factors(x)` returned.
     fn gradients(&self, f: &Self::Factors) -> [Vector; N];
 
+    /// Σ_k N_k v_k and Σ_k v_k ⊗ ∇N_k over the stencil, v_k = `value(k)` in slot order: the
+    /// value and the gradient (1/m) of the field the nodes carry, at the point. The default
+    /// forms the N weights and gradients and sums node by node; tensor-product functions in
+    /// space override it with sums factorised per axis (the same terms, fewer products, other
+    /// round-off).
+    #[inline(always)]
+    fn interpolate(&self, f: &Self::Factors, value: impl Fn(usize) -> Vector) -> (Vector, Matrix) {
+        let (w, g) = (self.weights(f), self.gradients(f));
+        let (mut v, mut l) = (Vector::ZERO, Matrix::ZERO);
+        for k in 0..N {
+            let value = value(k);
+            v += w[k] * value;
+            l += outer(value, g[k]);
+        }
+        (v, l)
+    }
+
+    /// Σ_k v_k ⊗ ∇N_k alone (1/m): the gradient of [`ShapeFunctions::interpolate`].
+    #[inline(always)]
+    fn gradient(&self, f: &Self::Factors, value: impl Fn(usize) -> Vector) -> Matrix {
+        let g = self.gradients(f);
+        let mut l = Matrix::ZERO;
+        for (k, g) in g.into_iter().enumerate() {
+            l += outer(value(k), g);
+        }
+        l
+    }
+
+    /// one particle's share of every stencil node's force, (m N_k) b − V σ·∇N_k (N), slot by
+    /// slot: its weight of its body force m b and its internal force (eqs 2–3), the stress
+    /// given by its in-plane columns σ e_a (Pa, tension positive) and `weights` its N_k. The
+    /// default sums node by node; tensor-product functions in space override it with sums
+    /// factorised per axis.
+    #[inline(always)]
+    fn nodal_forces(
+        &self,
+        f: &Self::Factors,
+        weights: &[f64; N],
+        (mass, body): (f64, Vector),
+        volume: f64,
+        stress: [Vector; DIM],
+    ) -> [Vector; N] {
+        let g = self.gradients(f);
+        std::array::from_fn(|k| {
+            let mut sg = stress[0] * g[k][0];
+            for (a, column) in stress.iter().enumerate().skip(1) {
+                sg += *column * g[k][a];
+            }
+            (mass * weights[k]) * body - volume * sg
+        })
+    }
+
     /// nodes, weights and gradients at `x`; a typed error for a point off the grid.
     #[inline(always)]
     fn stencil(&self, x: Vector) -> Result<Stencil<N>, LocateError> {
@@ -117,4 +169,13 @@ pub trait ShapeFunctions<const N: usize>: Send + Sync {
         let _ = node;
         None
     }
+}
+
+/// a ⊗ b: the matrix whose column j is a b_j.
+#[inline(always)]
+fn outer(a: Vector, b: Vector) -> Matrix {
+    #[cfg(not(feature = "dim3"))]
+    return Matrix::from_cols(a * b.x, a * b.y);
+    #[cfg(feature = "dim3")]
+    return Matrix::from_cols(a * b.x, a * b.y, a * b.z);
 }

@@ -44,15 +44,6 @@ impl std::fmt::Display for At {
     }
 }
 
-/// a ⊗ b, the matrix whose columns are a·b_x, a·b_y (, a·b_z): (a ⊗ b)_kl = a_k b_l.
-#[inline(always)]
-pub(crate) fn outer(a: Vector, b: Vector) -> Matrix {
-    #[cfg(not(feature = "dim3"))]
-    return Matrix::from_cols(a * b.x, a * b.y);
-    #[cfg(feature = "dim3")]
-    return Matrix::from_cols(a * b.x, a * b.y, a * b.z);
-}
-
 /// a particle's stress as the full symmetric tensor the constitutive models take.
 #[inline(always)]
 pub(crate) fn full_stress(s: &Stress) -> mpm_constitutive::SymTensor {

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::config::Transfer;
 use crate::error::{Field, SolverError};
-use crate::math::{Matrix, Real, Vector, outer};
+use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
 use crate::scratch::Scratch;
 use crate::solver::Solver;
@@ -174,15 +174,7 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
         .map(|(c, ((xs, vs), cs))| {
             for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
                 let q = c * chunk + j;
-                let (w, grad) = (shape.weights(&factors[q]), shape.gradients(&factors[q]));
-                let mut v_new = Vector::ZERO;
-                let mut c_new = Matrix::ZERO;
-                for k in 0..N {
-                    let v_end = end[idx[q][k] as usize];
-                    v_new += w[k] * v_end;
-                    let g = grad[k];
-                    c_new += outer(v_end, g);
-                }
+                let (v_new, c_new) = shape.interpolate(&factors[q], |k| end[idx[q][k] as usize]);
                 let x_new = *x + dt * v_new;
                 check_finite(step, q, *x, x_new, v_new)?;
                 *x = x_new;

@@ -17,7 +17,7 @@ use crate::config::{Boundaries, Contact};
 use crate::error::SolverError;
 use crate::math::{DIM, Vector};
 use crate::par::{chunk_len, counting_sort};
-use crate::scratch::{BoundaryNode, Mirror, NodePlane, Scratch};
+use crate::scratch::{BoundaryNode, Mirror, NodePlane, PatchSums, Scratch};
 use crate::solver::Solver;
 use crate::stages::p2g::patch_side;
 
@@ -334,9 +334,7 @@ fn index_blocks<F, const N: usize>(sc: &mut Scratch<F, N>) {
         sc.neighbours.push(std::array::from_fn(rank));
     }
     let cells = active.block_count() * side.pow(DIM as u32);
-    sc.patch_mass.resize(cells, 0.0);
-    sc.patch_momentum.resize(cells, Vector::ZERO);
-    sc.patch_force.resize(cells, Vector::ZERO);
+    sc.patch.resize(cells, PatchSums::default());
 }
 
 /// puts the dense index of every stencil node into `node_index`; false when some node is not in

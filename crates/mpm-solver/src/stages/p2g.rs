@@ -26,7 +26,7 @@ use crate::config::Transfer;
 use crate::consistent::Solve;
 use crate::error::SolverError;
 use crate::math::{DIM, Matrix, Real, Stress, Vector};
-use crate::scratch::{NEIGHBOURS, Scratch};
+use crate::scratch::{NEIGHBOURS, PatchSums, Scratch};
 use crate::solver::Solver;
 
 /// nodes along each side of a block's patch for stencils of `n` nodes: the block's 8 and the
@@ -208,9 +208,7 @@ fn scatter<
         bin_particle,
         base,
         active,
-        patch_mass,
-        patch_momentum,
-        patch_force,
+        patch,
         node_block,
         node_local,
         neighbours,
@@ -220,81 +218,72 @@ fn scatter<
         ..
     } = sc;
     let (factors, base) = (&factors[..], &base[..]);
-    patch_mass
-        .par_chunks_mut(cells)
-        .zip(patch_momentum.par_chunks_mut(cells))
-        .zip(patch_force.par_chunks_mut(cells))
-        .enumerate()
-        .for_each(|(b, ((bm, bq), bf))| {
-            let mut place = [Vector::ZERO; MAX_PATCH];
-            if MASS {
-                bm.fill(0.0);
+    patch.par_chunks_mut(cells).enumerate().for_each(|(b, sums)| {
+        let mut place = [Vector::ZERO; MAX_PATCH];
+        // the sums this pass does not form stay zero, unread
+        sums.fill(PatchSums::default());
+        if APIC {
+            let o = active.block_origin(b);
+            for (c, x) in place[..cells].iter_mut().enumerate() {
+                let d = std::array::from_fn(|a| ((c / side.pow(a as u32)) % side) as i32);
+                *x = shape.node_position(o.offset(d));
             }
-            if MOMENTUM {
-                bq.fill(Vector::ZERO);
-            }
-            if FORCE {
-                bf.fill(Vector::ZERO);
-            }
-            if APIC {
-                let o = active.block_origin(b);
-                for (c, x) in place[..cells].iter_mut().enumerate() {
-                    let d = std::array::from_fn(|a| ((c / side.pow(a as u32)) % side) as i32);
-                    *x = shape.node_position(o.offset(d));
-                }
-            }
-            let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
-            for q in bin {
-                let q = q.load(Ordering::Relaxed) as usize;
-                let at = usize::from(base[q]);
-                let (m, v, f) = (mass[q], velocity[q], &factors[q]);
-                let wq = shape.weights(f);
-                let gq = if FORCE { shape.gradients(f) } else { [Vector::ZERO; N] };
-                let (vol, s) = (volume[q], stress[q]);
-                let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
-                let (c_q, x0) =
-                    if APIC { (affine[q], position[q] - dt_back * v) } else { Default::default() };
-                // In 3D (a regular grid) x_i − x_p separates by axis, so C (x_i − x_p) is
-                // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
-                // along each axis: 3w products per particle instead of 9 per node.
-                #[cfg(feature = "dim3")]
-                let columns: [[Vector; 3]; DIM] = if APIC {
-                    std::array::from_fn(|a| {
-                        std::array::from_fn(|t| {
-                            let node = place[at + t.min(w - 1) * stride[a]];
-                            c_q.col(a) * (node[a] - x0[a])
-                        })
+        }
+        let bin = &bin_particle[bin_start[b] as usize..bin_start[b + 1] as usize];
+        for q in bin {
+            let q = q.load(Ordering::Relaxed) as usize;
+            let at = usize::from(base[q]);
+            let (m, v, f) = (mass[q], velocity[q], &factors[q]);
+            let wq = shape.weights(f);
+            let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
+            let fq = if FORCE {
+                shape.nodal_forces(f, &wq, (m, b), volume[q], columns(&stress[q]))
+            } else {
+                [Vector::ZERO; N]
+            };
+            let (c_q, x0) =
+                if APIC { (affine[q], position[q] - dt_back * v) } else { Default::default() };
+            // In 3D (a regular grid) x_i − x_p separates by axis, so C (x_i − x_p) is
+            // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
+            // along each axis: 3w products per particle instead of 9 per node.
+            #[cfg(feature = "dim3")]
+            let columns: [[Vector; 3]; DIM] = if APIC {
+                std::array::from_fn(|a| {
+                    std::array::from_fn(|t| {
+                        let node = place[at + t.min(w - 1) * stride[a]];
+                        c_q.col(a) * (node[a] - x0[a])
                     })
+                })
+            } else {
+                Default::default()
+            };
+            for k in 0..N {
+                let c = at + offset[k];
+                let mw = m * wq[k];
+                #[cfg(not(feature = "dim3"))]
+                let momentum = if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
+                #[cfg(feature = "dim3")]
+                let momentum = if APIC {
+                    let [tx, ty, tz] = slots[k];
+                    mw * (v + (columns[0][tx] + columns[1][ty] + columns[2][tz]))
                 } else {
-                    Default::default()
+                    mw * v
                 };
-                for k in 0..N {
-                    let c = at + offset[k];
-                    let mw = m * wq[k];
-                    if MASS {
-                        bm[c] += mw;
-                    }
-                    #[cfg(not(feature = "dim3"))]
-                    if MOMENTUM {
-                        bq[c] += if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
-                    }
-                    #[cfg(feature = "dim3")]
-                    if MOMENTUM {
-                        bq[c] += if APIC {
-                            let [tx, ty, tz] = slots[k];
-                            mw * (v + (columns[0][tx] + columns[1][ty] + columns[2][tz]))
-                        } else {
-                            mw * v
-                        };
-                    }
-                    if FORCE {
-                        bf[c] += mw * b - vol * in_plane(&s, gq[k]);
-                    }
+                let sums = &mut sums[c];
+                if MASS {
+                    sums.mass += mw;
+                }
+                if MOMENTUM {
+                    sums.momentum += momentum;
+                }
+                if FORCE {
+                    sums.force += fq[k];
                 }
             }
-        });
+        }
+    });
     reduce::<N, MASS, MOMENTUM, FORCE>(
-        (&patch_mass[..], &patch_momentum[..], &patch_force[..]),
+        &patch[..],
         (&node_block[..], &node_local[..], &neighbours[..]),
         (&mut nodal_mass[..], &mut nodal_velocity[..], &mut nodal_force[..]),
     );
@@ -303,9 +292,8 @@ fn scatter<
 /// the patches' sums into the nodal arrays: each node adds the patches that hold it in a fixed
 /// order (the module docs). Generic over the stencil size and the sums formed only: one copy per
 /// stencil size, whatever the model and shape functions.
-#[allow(clippy::type_complexity)]
 fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
-    (pm, pq, pf): (&[Real], &[Vector], &[Vector]),
+    patch: &[PatchSums],
     (node_block, node_local, neighbours): (&[u32], &[u8], &[[u32; NEIGHBOURS]]),
     (nodal_mass, nodal_velocity, nodal_force): (&mut [Real], &mut [Vector], &mut [Vector]),
 ) {
@@ -325,15 +313,15 @@ fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: b
             let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
             let mut add = |src: u32, at: usize| {
                 if src != u32::MAX {
-                    let at = src as usize * cells + at;
+                    let s = &patch[src as usize * cells + at];
                     if MASS {
-                        ms += pm[at];
+                        ms += s.mass;
                     }
                     if MOMENTUM {
-                        q += pq[at];
+                        q += s.momentum;
                     }
                     if FORCE {
-                        fs += pf[at];
+                        fs += s.force;
                     }
                 }
             };
@@ -385,22 +373,19 @@ fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: b
         });
 }
 
-/// σ·G in the plane of the analysis (plane strain: σ_zz does not act on an in-plane gradient).
+/// the stress's columns σ e_a in the plane of the analysis (plane strain: σ_zz does not act
+/// on an in-plane gradient).
 #[inline(always)]
 #[cfg(not(feature = "dim3"))]
-fn in_plane(s: &Stress, g: Vector) -> Vector {
-    Vector::new(s.xx * g.x + s.xy * g.y, s.xy * g.x + s.yy * g.y)
+fn columns(s: &Stress) -> [Vector; DIM] {
+    [Vector::new(s.xx, s.xy), Vector::new(s.xy, s.yy)]
 }
 
-/// σ·G: the stress applied to a shape-function gradient (in 3D the whole tensor).
+/// the stress's columns σ e_a (in 3D the whole tensor).
 #[inline(always)]
 #[cfg(feature = "dim3")]
-fn in_plane(s: &Stress, g: Vector) -> Vector {
-    Vector::new(
-        s.xx * g.x + s.xy * g.y + s.zx * g.z,
-        s.xy * g.x + s.yy * g.y + s.yz * g.z,
-        s.zx * g.x + s.yz * g.y + s.zz * g.z,
-    )
+fn columns(s: &Stress) -> [Vector; DIM] {
+    [Vector::new(s.xx, s.xy, s.zx), Vector::new(s.xy, s.yy, s.yz), Vector::new(s.zx, s.yz, s.zz)]
 }
 
 #[cfg(all(test, not(feature = "dim3")))]
@@ -470,7 +455,8 @@ mod tests {
                         }
                     };
                     let s_ = &p.stress[i];
-                    let sg = super::in_plane(s_, gr);
+                    let [cx, cy] = super::columns(s_);
+                    let sg = cx * gr.x + cy * gr.y;
                     m[n] += mw;
                     q[n] += mw * v;
                     f[n] += mw * g - p.volume[i] * sg;

@@ -16,7 +16,9 @@ use rayon::prelude::*;
 
 use crate::config::{Scheme, Transfer};
 use crate::error::SolverError;
-use crate::math::{Matrix, Real, Stress, Vector, full_stress, outer};
+#[cfg(feature = "dim3")]
+use crate::math::Matrix;
+use crate::math::{Real, Stress, full_stress};
 use crate::par::chunk_len;
 use crate::report::BranchCounts;
 use crate::scratch::Ahead;
@@ -109,14 +111,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                     let l = if from_affine {
                         affine[q]
                     } else {
-                        let mut l = Matrix::ZERO;
-                        let grads = shape.gradients(&factors[j]);
-                        for k in 0..N {
-                            let v = nodal[idx[j][k] as usize];
-                            let g: Vector = grads[k];
-                            l += outer(v, g);
-                        }
-                        l
+                        shape.gradient(&factors[j], |k| nodal[idx[j][k] as usize])
                     };
                     if last {
                         // the next step's stencil, at the final position (`locate.rs`).
