@@ -3,11 +3,12 @@
 //! anything is built.
 
 use mpm_contact::Wall;
-use mpm_grid::NodeId;
+use mpm_grid::{BLOCK_SIDE, NodeId};
 
 use crate::error::SolverError;
-use crate::math::{Matrix, Real, Vector};
+use crate::math::{DIM, Matrix, Real, Vector};
 use crate::particles::Particles;
+use crate::scratch::PatchSums;
 
 /// the most bytes the factors of a 4-node stencil take (`Bilinear<TerrainGrid>`: a, b, ∂b/∂x).
 pub(crate) const FACTORS_4: usize = 3 * size_of::<Real>();
@@ -40,11 +41,13 @@ pub fn estimated_bytes(
         // bin entry, place in the block's patch
         + size_of::<u32>()
         + 1;
-    // Each 8 × 8 block holds a patch of side² partial sums whatever its fill, plus its bin
-    // start, neighbours and sort counters: charged per node as if blocks were half full (a
-    // full block costs half this, a thin strip of material more).
-    let side = 8 + (1..=stencil).find(|w| w * w >= stencil).unwrap_or(1) - 1;
-    let per_block = side * side * (size_of::<Real>() + 2 * size_of::<Vector>()) + 20 + 64;
+    // Each block of 64 nodes (8 × 8, in space 4 × 4 × 4) holds a patch of side² (side³)
+    // partial sums whatever its fill, plus its bin start, neighbours and sort counters: charged
+    // per node as if blocks were half full (a full block costs half this, a thin strip of
+    // material more).
+    let w = (1..=stencil).find(|w| w.pow(DIM as u32) >= stencil).unwrap_or(1);
+    let side = BLOCK_SIDE as usize + w - 1;
+    let per_block = side.pow(DIM as u32) * size_of::<PatchSums>() + 20 + 64;
     let per_node = size_of::<NodeId>()
         + 8
         // block rank, place in the patch, referenced, boundary position

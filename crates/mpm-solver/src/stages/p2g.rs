@@ -247,7 +247,7 @@ fn scatter<
             // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
             // along each axis: 3w products per particle instead of 9 per node.
             #[cfg(feature = "dim3")]
-            let columns: [[Vector; 3]; DIM] = if APIC {
+            let affine_terms: [[Vector; 3]; DIM] = if APIC {
                 std::array::from_fn(|a| {
                     std::array::from_fn(|t| {
                         let node = place[at + t.min(w - 1) * stride[a]];
@@ -265,7 +265,7 @@ fn scatter<
                 #[cfg(feature = "dim3")]
                 let momentum = if APIC {
                     let [tx, ty, tz] = slots[k];
-                    mw * (v + (columns[0][tx] + columns[1][ty] + columns[2][tz]))
+                    mw * (v + (affine_terms[0][tx] + affine_terms[1][ty] + affine_terms[2][tz]))
                 } else {
                     mw * v
                 };
