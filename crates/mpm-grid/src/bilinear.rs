@@ -179,12 +179,12 @@ impl ShapeFunctions<8> for Bilinear<RegularGrid> {
         &self,
         f: &[f64; 3],
         _weights: &[f64; 8],
-        (mass, body): (f64, Vector),
+        mass_body: (f64, Vector),
         volume: f64,
         stress: [Vector; 3],
     ) -> [Vector; 8] {
-        let columns = crate::tensor::scaled_columns(volume, stress, self.0.inverse_cell_size());
-        crate::tensor::forces(&hats(f), mass * body, columns)
+        let inv = self.0.inverse_cell_size();
+        crate::tensor::forces(&hats(f), inv, mass_body, volume, stress)
     }
 
     fn node_position(&self, node: NodeId) -> Vector {

@@ -241,12 +241,11 @@ impl AxisFactors {
     pub(crate) fn nodal_forces(
         &self,
         inv_cell: Vector,
-        (mass, body): (f64, Vector),
+        mass_body: (f64, Vector),
         volume: f64,
         stress: [Vector; DIM],
     ) -> [Vector; WIDE] {
-        let columns = crate::tensor::scaled_columns(volume, stress, inv_cell);
-        crate::tensor::forces(&[self.x, self.y, self.z], mass * body, columns)
+        crate::tensor::forces(&[self.x, self.y, self.z], inv_cell, mass_body, volume, stress)
     }
 }
 

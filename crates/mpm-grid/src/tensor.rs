@@ -46,16 +46,20 @@ pub(crate) fn interpolate<const W: usize>(
     (v, Matrix::from_cols(gx * inv.x, gy * inv.y, gz * inv.z))
 }
 
-/// m S_k b − V σ·∇S_k for every slot k (eqs 2–3 of one particle), given m b and the stress's
-/// columns already scaled, p_a = −V σ e_a / h_a: then the node's share is
+/// m S_k b − V σ·∇S_k for every slot k (eqs 2–3 of one particle), the stress given by its
+/// columns σ e_a and `inv` holding 1/h per axis. With p_a = −V σ e_a / h_a the node's share is
 /// s_a (t_b u_c m b + t′_b u_c p_y + t_b u′_c p_z) + s′_a (t_b u_c p_x).
 #[inline(always)]
 pub(crate) fn forces<const W: usize, const N: usize>(
     [x, y, z]: &Axes<W>,
-    mb: Vector,
-    [px, py, pz]: [Vector; 3],
+    inv: Vector,
+    (mass, body): (f64, Vector),
+    volume: f64,
+    stress: [Vector; 3],
 ) -> [Vector; N] {
     const { assert!(W * W * W == N, "a stencil of w × w × w nodes") };
+    let mb = mass * body;
+    let [px, py, pz]: [Vector; 3] = std::array::from_fn(|a| (-volume * inv[a]) * stress[a]);
     let mut out = [Vector::ZERO; N];
     for (c, &(sz, dz)) in z.iter().enumerate() {
         for (b, &(sy, dy)) in y.iter().enumerate() {
@@ -68,10 +72,4 @@ pub(crate) fn forces<const W: usize, const N: usize>(
         }
     }
     out
-}
-
-/// the scaled stress columns of [`forces`]: p_a = −V σ e_a / h_a.
-#[inline(always)]
-pub(crate) fn scaled_columns(volume: f64, stress: [Vector; 3], inv: Vector) -> [Vector; 3] {
-    std::array::from_fn(|a| (-volume * inv[a]) * stress[a])
 }
