@@ -346,6 +346,9 @@ fn check_space(scene: &SpaceScene) -> ExitCode {
                 r.frames,
                 r.frame_bytes as f64 / 1e6
             );
+            for w in &scene.warnings {
+                println!("  warning: {w}");
+            }
             ExitCode::SUCCESS
         }
         Err(e) => run_failure(&e),

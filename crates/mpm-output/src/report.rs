@@ -30,20 +30,69 @@ pub fn plots(
     deposit: &Deposit<'_>,
 ) -> Result<(), OutputError> {
     let r = scene.resolved();
-    energy(plot_dir, h)?;
+    energy(plot_dir, &h.energy, "energy (J/m)")?;
     if !r.output.probes.is_empty() {
         probes(plot_dir, scene, h, deposit.time)?;
     }
-    runout(plot_dir, h)?;
+    runout(plot_dir, &h.runout)?;
     final_deposit(plot_dir, scene, deposit)
 }
 
-/// `energy.png`: the ledger's terms over time.
-fn energy(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
-    let e0 = h.energy.first().map_or(0.0, |r| r.ledger.potential);
+/// The particles of a 3D run in plan (x, z), for its deposit plot.
+pub struct PlanDeposit {
+    /// final (x, z) (m).
+    pub positions: Vec<(f64, f64)>,
+    /// initial (x, z) (m).
+    pub initial: Vec<(f64, f64)>,
+    /// simulated time of the final positions (s).
+    pub time: f64,
+}
+
+/// draws a 3D run's plots into `plot_dir`: `energy.png` (J), `runout.png` (measured in the
+/// vertical plane of the runout direction) and `deposit.png`, the particles in plan.
+pub fn space_plots(
+    plot_dir: &Path,
+    energy_rows: &[EnergyRow],
+    runout_rows: &[RunoutMetrics],
+    deposit: &PlanDeposit,
+) -> Result<(), OutputError> {
+    energy(plot_dir, energy_rows, "energy (J)")?;
+    runout(plot_dir, runout_rows)?;
+    let title = format!("Deposit in plan at t = {:.3} s", deposit.time);
+    plots::chart(
+        &plot_dir.join("deposit.png"),
+        &Chart {
+            title: &title,
+            x_label: "x (m)",
+            y_label: "z (m)",
+            size: (900, 900),
+            equal_aspect: true,
+        },
+        // the final particles first, the initial ones over them (the release is the smaller
+        // area of the two)
+        &[
+            Series {
+                name: "final".into(),
+                points: deposit.positions.clone(),
+                style: Style::Points,
+                color: 0,
+            },
+            Series {
+                name: "initial".into(),
+                points: deposit.initial.clone(),
+                style: Style::Points,
+                color: 6,
+            },
+        ],
+    )
+}
+
+/// `energy.png`: the ledger's terms over time, `unit` the y axis's label.
+fn energy(plot_dir: &Path, rows: &[EnergyRow], unit: &str) -> Result<(), OutputError> {
+    let e0 = rows.first().map_or(0.0, |r| r.ledger.potential);
     let line = |name: &str, color, f: &dyn Fn(&EnergyRow) -> f64| Series {
         name: name.into(),
-        points: h.energy.iter().map(|row| (row.time, f(row))).collect(),
+        points: rows.iter().map(|row| (row.time, f(row))).collect(),
         style: Style::Line,
         color,
     };
@@ -52,7 +101,7 @@ fn energy(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
         &Chart {
             title: "Energy history",
             x_label: "time (s)",
-            y_label: "energy (J/m)",
+            y_label: unit,
             size: (900, 560),
             equal_aspect: false,
         },
@@ -123,10 +172,10 @@ fn probes(plot_dir: &Path, scene: &Scene, h: &History, time: f64) -> Result<(), 
 }
 
 /// `runout.png`: front, tail and centre-of-mass travel over time.
-fn runout(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
+fn runout(plot_dir: &Path, rows: &[RunoutMetrics]) -> Result<(), OutputError> {
     let runout_line = |name: &str, color, f: &dyn Fn(&RunoutMetrics) -> f64| Series {
         name: name.into(),
-        points: h.runout.iter().map(|m| (m.time, f(m))).collect(),
+        points: rows.iter().map(|m| (m.time, f(m))).collect(),
         style: Style::Line,
         color,
     };
@@ -140,8 +189,8 @@ fn runout(plot_dir: &Path, h: &History) -> Result<(), OutputError> {
             equal_aspect: false,
         },
         &[
-            runout_line("front x", 0, &|m| m.front_x),
-            runout_line("tail x", 2, &|m| m.tail_x),
+            runout_line("front", 0, &|m| m.front_x),
+            runout_line("tail", 2, &|m| m.tail_x),
             runout_line("max thickness", 3, &|m| m.max_thickness),
             runout_line("centre-of-mass travel", 4, &|m| m.com_travel),
         ],

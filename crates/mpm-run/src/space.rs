@@ -9,7 +9,8 @@
 //! the centre of mass's travel is its 3D distance. Checkpoints (every
 //! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
 //! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume`]
-//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit, plots.
+//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit. The plots are the energy, the runout
+//! and the deposit in plan.
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -22,7 +23,7 @@ use mpm_grid3d::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History, state_hash};
 use mpm_output::csv::{self, EnergyRow};
 use mpm_output::dir::prepare_dir;
-use mpm_output::{OutputError, atomic, vtk};
+use mpm_output::{OutputError, atomic, report, vtk};
 use mpm_scene::dispatch::SceneModel;
 use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
@@ -630,6 +631,15 @@ impl<'a> SpaceDriver<'a> {
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+            if scene.output.plots {
+                let plan = |v: &[mpm_solver3d::Vector]| v.iter().map(|x| (x.x, x.z)).collect();
+                let deposit = report::PlanDeposit {
+                    positions: plan(&p.position),
+                    initial: plan(&p.initial_position),
+                    time: t,
+                };
+                report::space_plots(&dir.join("plots"), &self.energy, &self.runout, &deposit)?;
+            }
         }
         Ok(summary)
     }

@@ -613,6 +613,10 @@ pub struct OutputSpec {
     /// line, `plots/deposit.png`).
     #[serde(default)]
     pub observed: Option<ObservedSpec>,
+    /// 3D only: the horizontal direction `[x, y, z]` the runout is measured along (its
+    /// vertical component is dropped); default the horizontal part of gravity, else +x.
+    #[serde(default, deserialize_with = "exact::triple", skip_serializing_if = "Option::is_none")]
+    pub runout_direction: Option<[f64; 3]>,
 }
 
 /// `[output] observed = { deposit = "observed.csv" }`.

@@ -170,3 +170,29 @@ fn the_factorised_stencil_sums_are_the_node_by_node_sums() {
     check(&Gimp::with_particles_per_cell(grid, [2, 2, 2]).unwrap(), "uGIMP");
     check(&QuadraticBSpline::new(grid), "B-spline");
 }
+
+/// A block thrown into a wall plane oblique to every grid axis (uGIMP), frictionless and with
+/// μ = 0.3: the momentum balance with the wall's impulse to round-off (no other force acts; sums
+/// of about 500 terms of order one); frictionless, the impulse along the normal only (each
+/// node's impulse is along n, so the sum is to round-off); with friction, the tangential
+/// impulse within Coulomb's cone (each node's is, so the sum is) and against the tangential
+/// approach (the nodes' trial tangential velocities are nearly that of the block: −0.9 leaves
+/// room for the block's spin and strain); the block rebounds, and no particle's centre ever
+/// lies behind the plane.
+#[test]
+fn a_block_rebounds_from_an_oblique_wall_plane_with_its_impulse() {
+    use mpm_tests::three_d::oblique_wall;
+    let free = oblique_wall(mpm_grid3d::RegularShape::Gimp, 0.0).unwrap();
+    assert!(free.balance < 1e-12, "balance {}", free.balance);
+    assert!(free.normal_impulse > 0.0);
+    assert!(free.tangential_impulse < 1e-12 * free.normal_impulse, "{free:?}");
+    assert!(free.normal_velocity_end > 0.0, "{free:?}");
+    assert!(free.closest_edge > -1.0, "{free:?}");
+    let rough = oblique_wall(mpm_grid3d::RegularShape::Gimp, 0.3).unwrap();
+    assert!(rough.balance < 1e-12, "balance {}", rough.balance);
+    assert!(rough.tangential_impulse > 0.0, "{rough:?}");
+    assert!(rough.tangential_impulse <= 0.3 * rough.normal_impulse * (1.0 + 1e-12), "{rough:?}");
+    assert!(rough.tangential_alignment < -0.9, "{rough:?}");
+    assert!(rough.normal_velocity_end > 0.0, "{rough:?}");
+    assert!(rough.closest_edge > -1.0, "{rough:?}");
+}

@@ -25,6 +25,11 @@ const ROUND_OFF: f64 = 1e-12;
 /// rounding and Newton holds the confinement to 1e-9 (`NEWTON_REL_TOL`).
 const CONE_REL: f64 = 1e-6;
 
+/// The rough oblique wall: the cosine between the wall's tangential impulse and the block's
+/// tangential approach is at most this (−1 exactly for a rigid block; the block's spin and strain
+/// turn the nodes' trial velocities a little).
+const ALIGNED: f64 = -0.9;
+
 /// The vibrating bar's period and energy over five periods: the 1 % (as in 2D).
 const BAR_REL: f64 = 0.01;
 /// Bagnold's profile and its steadiness, relative to the surface speed: the 2D rows' bound.
@@ -186,6 +191,72 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
     }
     triaxial(rows);
     plane_strain(rows);
+    oblique_walls(rows);
+}
+
+/// A block thrown into a wall plane oblique to every grid axis, frictionless and rough
+/// (`mpm_tests::three_d::oblique_wall`).
+fn oblique_walls(rows: &mut Rows) {
+    use mpm_tests::three_d::oblique_wall;
+    for mu in [0.0, 0.3] {
+        let case = format!("3D block thrown into an oblique wall plane, μ = {mu} (uGIMP)");
+        let r = match oblique_wall(RegularShape::Gimp, mu) {
+            Ok(r) => r,
+            Err(e) => {
+                rows.failed(&case, "run", &e);
+                continue;
+            }
+        };
+        rows.at_most(
+            (&case, "max |p(t) − p0 − J_wall(t)| / |p0|"),
+            "0 (no other force)",
+            "momentum balance",
+            r.balance,
+            ROUND_OFF,
+            false,
+        );
+        if mu == 0.0 {
+            rows.at_most(
+                (&case, "|J_t| / J_n (wall impulse)"),
+                "0",
+                "a frictionless plane pushes along its normal",
+                r.tangential_impulse / r.normal_impulse,
+                ROUND_OFF,
+                false,
+            );
+        } else {
+            rows.at_most(
+                (&case, "|J_t| / (μ J_n) (wall impulse)"),
+                "≤ 1",
+                "Coulomb's cone (eq 16 for a vector)",
+                r.tangential_impulse / (mu * r.normal_impulse),
+                1.0 + ROUND_OFF,
+                false,
+            );
+            rows.at_most(
+                (&case, "J_t·v_t0 / (|J_t| |v_t0|)"),
+                "−1",
+                "friction opposes the tangential approach",
+                r.tangential_alignment,
+                ALIGNED,
+                false,
+            );
+        }
+        rows.at_least(
+            (&case, "centre-of-mass velocity along n at the end (m/s)"),
+            "> 0 (rebound; approach −1.68)",
+            "impact",
+            r.normal_velocity_end,
+            0.0,
+        );
+        rows.at_least(
+            (&case, "min (d − r_p) / r_p over the run"),
+            "> −1 (no centre behind the plane)",
+            "node boundary (eq 14)",
+            r.closest_edge,
+            -1.0,
+        );
+    }
 }
 
 /// The 2D column of the plane-strain equivalence row.

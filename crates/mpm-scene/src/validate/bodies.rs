@@ -556,7 +556,7 @@ fn fits_in_memory(
 /// the first pair (i, j) of non-adjacent edges (edge k runs from vertex k to k + 1, the last one
 /// back to vertex 0) that cross or touch, or a repeated vertex: `None` for a simple polygon.
 /// O(n²) in the vertices, bounded by [`MAX_VERTICES`].
-fn self_intersection(v: &[Vector]) -> Option<(usize, usize)> {
+pub(super) fn self_intersection(v: &[Vector]) -> Option<(usize, usize)> {
     let n = v.len();
     let edge = |k: usize| (v[k], v[(k + 1) % n]);
     let orient = |a: Vector, b: Vector, c: Vector| (b - a).perp_dot(c - a);

@@ -21,6 +21,15 @@ pub(super) fn build(
     boundaries: &Boundaries,
     gravity: Vector,
 ) -> Result<ResolvedOutput, SceneError> {
+    if let Some(d) = o.runout_direction {
+        return Err(ctx.err(
+            "output.runout_direction",
+            Some(format!("{d:?}")),
+            "a 2D scene's runout is measured along its x axis",
+            "`runout_direction` in a 3D scene only",
+            "remove it (a 2D section runs along x)",
+        ));
+    }
     let interval = o.interval.unwrap_or(end_time / 50.0);
     if !(finite_pos(interval) && end_time / interval <= 1e6) {
         return Err(ctx.range(

@@ -4,9 +4,11 @@
 //! scene that means the value silences the warning by name: `silence = ["NAME", ...]` at the
 //! top of the file.
 
+use std::collections::BTreeMap;
+
 use super::{Ctx, num};
 use crate::error::SceneError;
-use crate::file::{BoundarySpec, GridKind, SceneFile};
+use crate::file::{BoundarySpec, GridKind, MaterialSpec, SceneFile, SpaceFile};
 use crate::scene::Warning;
 
 /// The warnings, by name, with what each one flags.
@@ -16,6 +18,11 @@ pub const WARNINGS: &[(&str, &str)] = &[
     ("density_in_g_cm3", "a material density below 10 kg/m³"),
     ("young_below_1kpa", "a Young's modulus below 1 kPa"),
     ("no_floor", "a regular grid under gravity with no ground and no wall"),
+    (
+        "plane_strain_cone_in_3d",
+        "a Drucker-Prager material of a 3D scene without `cone_match` (the default is the \
+         plane-strain match)",
+    ),
 ];
 
 /// A boundary coefficient above this is a friction angle in degrees by mistake (μ = 2 is a
@@ -35,7 +42,62 @@ pub(super) fn warnings(
     f: &SceneFile,
     gravity: f64,
 ) -> Result<Vec<Warning>, SceneError> {
-    for (k, name) in f.silence.iter().enumerate() {
+    let b = &f.boundaries;
+    let sides = [("ground", b.ground), ("left_wall", b.left_wall), ("right_wall", b.right_wall)];
+    let walls = b.walls.iter().enumerate().map(|(k, w)| (format!("walls[{k}]"), Some(w.law)));
+    let laws = sides.into_iter().map(|(n, l)| (n.to_string(), l)).chain(walls).collect();
+    let floorless = f.grid.kind == GridKind::Regular && b.ground.is_none() && b.walls.is_empty();
+    judge(ctx, &f.silence, laws, &f.materials, floorless && gravity > 0.0)
+}
+
+/// A 3D scene's warnings: the same names over its six faces, its walls and its materials.
+pub(super) fn space_warnings(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    gravity: f64,
+) -> Result<Vec<Warning>, SceneError> {
+    let b = &f.boundaries;
+    let faces = [
+        ("ground", b.ground),
+        ("left_wall", b.left_wall),
+        ("right_wall", b.right_wall),
+        ("back_wall", b.back_wall),
+        ("front_wall", b.front_wall),
+    ];
+    let walls = b.walls.iter().enumerate().map(|(k, w)| (format!("walls[{k}]"), Some(w.law)));
+    let laws = faces.into_iter().map(|(n, l)| (n.to_string(), l)).chain(walls).collect();
+    let floorless = b.ground.is_none() && b.walls.is_empty();
+    let mut out = judge(ctx, &f.silence, laws, &f.materials, floorless && gravity > 0.0)?;
+    let name = "plane_strain_cone_in_3d";
+    if !f.silence.iter().any(|s| s == name) {
+        for (m, spec) in &f.materials {
+            if spec.kind() == Some("drucker_prager") && !spec.0.contains_key("cone_match") {
+                out.push(Warning {
+                    name: name.into(),
+                    field: format!("materials.{m}.cone_match"),
+                    message: "the Drucker-Prager cone defaults to the paper's plane-strain match \
+                              to Mohr-Coulomb, which in 3D is neither the compression nor the \
+                              extension corner: write `cone_match = \"outer\"` (triaxial \
+                              compression) or another match, or silence this if the \
+                              plane-strain cone is meant"
+                        .into(),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The warnings of the boundary `laws` (field name, law), the materials and a missing floor,
+/// less those `silence` names; an unknown name in `silence` is refused.
+fn judge(
+    ctx: &Ctx<'_>,
+    silence: &[String],
+    laws: Vec<(String, Option<BoundarySpec>)>,
+    materials: &BTreeMap<String, MaterialSpec>,
+    floorless: bool,
+) -> Result<Vec<Warning>, SceneError> {
+    for (k, name) in silence.iter().enumerate() {
         if !WARNINGS.iter().any(|(n, _)| n == name) {
             let names: Vec<String> = WARNINGS.iter().map(|(n, _)| format!("\"{n}\"")).collect();
             return Err(ctx.err(
@@ -49,14 +111,11 @@ pub(super) fn warnings(
     }
     let mut out = Vec::new();
     let mut warn = |name: &'static str, field: String, message: String| {
-        if !f.silence.iter().any(|s| s == name) {
+        if !silence.iter().any(|s| s == name) {
             out.push(Warning { name: name.into(), field, message });
         }
     };
-    let b = &f.boundaries;
-    let sides = [("ground", b.ground), ("left_wall", b.left_wall), ("right_wall", b.right_wall)];
-    let walls = b.walls.iter().enumerate().map(|(k, w)| (format!("walls[{k}]"), Some(w.law)));
-    for (name, law) in sides.into_iter().map(|(n, l)| (n.to_string(), l)).chain(walls) {
+    for (name, law) in laws {
         match law {
             Some(BoundarySpec::Friction(mu)) if mu > MOST_MU => warn(
                 "friction_as_degrees",
@@ -87,7 +146,7 @@ pub(super) fn warnings(
             _ => {}
         }
     }
-    for (name, m) in &f.materials {
+    for (name, m) in materials {
         let field = |k: &str| format!("materials.{name}.{k}");
         if let Some(a) = m.number("friction_angle_deg").filter(|a| *a > 0.0 && *a < LEAST_ANGLE_DEG)
         {
@@ -119,8 +178,7 @@ pub(super) fn warnings(
             );
         }
     }
-    let floorless = f.grid.kind == GridKind::Regular && b.ground.is_none() && b.walls.is_empty();
-    if floorless && gravity > 0.0 {
+    if floorless {
         warn(
             "no_floor",
             "boundaries.ground".into(),

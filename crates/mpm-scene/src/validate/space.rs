@@ -14,7 +14,7 @@ use mpm_solver3d::{
     Transfer, Vector,
 };
 
-use super::{Ctx, bodies, boundaries, finite_pos, materials, num, serde_error, solver};
+use super::{Ctx, bodies, boundaries, finite_pos, materials, num, plausible, serde_error, solver};
 use crate::error::SceneError;
 use crate::file::{
     Axis, BoundarySpec, GridKind, ShapeFunctionKind, SolverSpec, SpaceBodySpec, SpaceFile,
@@ -33,7 +33,20 @@ fn triple(p: [f64; 3]) -> String {
 pub fn load_space_str(text: &str, origin: &str) -> Result<SpaceScene, SceneError> {
     let map = SourceMap::new(text);
     let ctx = Ctx { origin, map: &map, dir: None };
-    let file: SpaceFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
+    let file: SpaceFile = toml::from_str(text).map_err(|e| {
+        if e.message().contains("unknown field `initial_state`") {
+            ctx.err(
+                "initial_state",
+                None,
+                "the implicit initial state (geostatic) is 2D only",
+                "no `[initial_state]` in a 3D scene",
+                "remove `[initial_state]`; in 3D, let the bodies settle under a ramped gravity \
+                 (`[solver] gravity_ramp`) before the flow starts",
+            )
+        } else {
+            serde_error(&ctx, &e)
+        }
+    })?;
     resolve(&ctx, file, text)
 }
 
@@ -61,10 +74,25 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let (materials, used) = materials::select(ctx, &f.materials, &names, &built)?;
     let (seeds, gimp_ppc) = seeds(ctx, &f, &grid, &used)?;
     let config = config(ctx, &f, &settings, gravity, &materials)?;
+    for (k, w) in config.walls.iter().enumerate() {
+        if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
+            return Err(ctx.err(
+                &format!("bodies[{}]", s.body),
+                None,
+                format!(
+                    "this body starts behind boundaries.walls[{k}] (a particle at {} lies on \
+                     the solid side of its plane)",
+                    s.position
+                ),
+                "bodies on the side every wall's normal points to",
+                "move the body, or reverse the wall's `normal` if it faces the wrong way",
+            ));
+        }
+    }
     let initial_dt = first_dt(ctx, &f, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let output = output(ctx, &f)?;
-    let horizontal = Vector::new(gravity.x, 0.0, gravity.z);
-    let runout_direction = horizontal.try_normalize().unwrap_or(Vector::X);
+    let warnings = plausible::space_warnings(ctx, &f, gravity.length())?;
+    let runout_direction = runout_direction(ctx, &f, gravity)?;
     Ok(SpaceScene {
         origin: ctx.origin.to_string(),
         text: text.to_string(),
@@ -82,9 +110,29 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
         stop_at_rest: settings.stop_at_rest,
         output,
         runout_direction,
-        warnings: Vec::new(),
+        warnings,
         file: f,
     })
+}
+
+/// `[output] runout_direction`, made horizontal and unit; default the horizontal part of
+/// gravity (the way a tilted-gravity slope falls), else +x.
+fn runout_direction(ctx: &Ctx<'_>, f: &SpaceFile, gravity: Vector) -> Result<Vector, SceneError> {
+    match f.output.runout_direction {
+        None => Ok(Vector::new(gravity.x, 0.0, gravity.z).try_normalize().unwrap_or(Vector::X)),
+        Some(d) => Vector::new(d[0], 0.0, d[2])
+            .try_normalize()
+            .filter(|_| d[1].is_finite())
+            .ok_or_else(|| {
+                ctx.err(
+                    "output.runout_direction",
+                    Some(triple(d)),
+                    "no horizontal direction: x and z are zero or not finite",
+                    "[dx, dy, dz] with (dx, dz) finite and not both zero (dy is dropped)",
+                    "give the way the flow runs in plan, e.g. `runout_direction = [1, 0, 0]`",
+                )
+            }),
+    }
 }
 
 /// `[solver] gravity` of a 3D scene: three finite components, default (0, −g, 0).
@@ -277,6 +325,24 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
                     "list the polygon's corners in order",
                 ));
             }
+            let mut polygon: Vec<DVec2> = vertices.iter().map(|v| DVec2::from_array(*v)).collect();
+            // a closing vertex that repeats the first one is a common way to write an outline
+            if polygon.len() > 3 && polygon.first() == polygon.last() {
+                polygon.pop();
+            }
+            if let Some((a, c)) = bodies::self_intersection(&polygon) {
+                return Err(ctx.err(
+                    &format!("{}[{a}]", p("vertices")),
+                    Some(format!("[{}, {}]", num(vertices[a][0]), num(vertices[a][1]))),
+                    format!(
+                        "the polygon is not simple: its edge from vertex {a} crosses the edge \
+                         from vertex {c} (a bow-tie has no inside)"
+                    ),
+                    "a simple polygon: edges meet only at their shared corners",
+                    "list the corners in order around the outline, or split the prism into two \
+                     bodies",
+                ));
+            }
             let axis = b.axis.ok_or_else(|| {
                 ctx.missing(&p("axis"), "a prism is extruded along an axis", "\"z\"")
             })?;
@@ -296,8 +362,7 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
                 Axis::Y => generate::Axis::Y,
                 Axis::Z => generate::Axis::Z,
             };
-            let vertices = vertices.iter().map(|v| DVec2::from_array(*v)).collect();
-            Ok(Shape::Prism { vertices, axis, from, to })
+            Ok(Shape::Prism { vertices: polygon, axis, from, to })
         }
     }
 }
@@ -491,6 +556,11 @@ fn config(
             mpm_solver3d::SolverError::Incompatible { setting, .. } => {
                 (format!("solver.{setting}"), "use an admissible combination")
             }
+            mpm_solver3d::SolverError::InvalidSetting { name, .. } if *name == "walls" => (
+                "boundaries.walls".to_string(),
+                "remove the walls or `periodic = true` (walls beside periodic sides are not \
+                 supported yet)",
+            ),
             mpm_solver3d::SolverError::InvalidSetting { name, .. } => {
                 (format!("solver.{name}"), "use an admissible value")
             }
@@ -566,7 +636,8 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
             path,
             None,
             "this output is not available in 3D scenes yet",
-            "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots",
+            "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots, \
+             runout_direction",
             "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
              summary.json)",
         ));
@@ -603,4 +674,177 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         plots: o.plots.unwrap_or(true),
         checkpoint_interval: o.checkpoint_interval,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::load_space_str;
+
+    /// A 3D scene with a box, a cylinder and a prism over a rough floor; `extra` is appended
+    /// (after the last table) and `swap` replaces one text for another.
+    fn scene(swap: (&str, &str), extra: &str) -> String {
+        let base = r#"
+[grid]
+dimension = 3
+kind = "regular"
+origin = [0.0, 0.0, 0.0]
+cell = [0.1, 0.1, 0.1]
+cells = [20, 10, 10]
+
+[materials.sand]
+kind = "drucker_prager"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+cohesion = 0.0
+friction_angle_deg = 30.0
+cone_match = "outer"
+
+[[bodies]]
+material = "sand"
+shape = "box"
+min = [0.2, 0.0, 0.2]
+max = [0.6, 0.4, 0.6]
+
+[[bodies]]
+material = "sand"
+shape = "cylinder"
+base = [1.0, 0.0, 0.5]
+radius = 0.2
+height = 0.3
+
+[[bodies]]
+material = "sand"
+shape = "prism"
+vertices = [[1.4, 0.0], [1.8, 0.0], [1.4, 0.4]]
+axis = "z"
+from = 0.1
+to = 0.5
+
+[boundaries]
+ground = "rough"
+
+[solver]
+end_time = 0.1
+"#;
+        assert!(base.contains(swap.0), "the base scene has no `{}`", swap.0);
+        base.replacen(swap.0, swap.1, 1) + extra
+    }
+
+    fn error(text: &str) -> String {
+        match load_space_str(text, "test.toml") {
+            Ok(_) => panic!("accepted:\n{text}"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    /// The three shapes fill their volumes: the particles' summed volume against the box
+    /// (0.4³), the cylinder (π 0.2² 0.3) and the prism (½ 0.4² · 0.4) within the lattice's
+    /// staircase: one layer of 0.05 m particles over each curved or slanted surface, bounded by
+    /// 0.05 m × that surface's area.
+    #[test]
+    fn the_three_shapes_fill_their_volumes() {
+        let s = load_space_str(&scene(("", ""), ""), "test.toml").unwrap();
+        let volume = |b: u16| s.seeds.iter().filter(|p| p.body == b).map(|p| p.volume).sum::<f64>();
+        assert!((volume(0) - 0.064).abs() < 1e-12, "box {}", volume(0));
+        let cyl = std::f64::consts::PI * 0.04 * 0.3;
+        let side = 2.0 * std::f64::consts::PI * 0.2 * 0.3;
+        assert!((volume(1) - cyl).abs() < 0.05 * side, "cylinder {} against {cyl}", volume(1));
+        let slant = 0.4 * std::f64::consts::SQRT_2 * 0.4;
+        assert!((volume(2) - 0.032).abs() < 0.05 * slant, "prism {}", volume(2));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    #[test]
+    fn a_body_behind_a_wall_plane_is_refused() {
+        let wall = "\n[[boundaries.walls]]\npoint = [0.4, 0.0, 0.0]\nnormal = [1.0, 0.0, 0.0]\n\
+                    law = \"frictionless\"\n";
+        let text = scene(("[boundaries]\nground = \"rough\"\n", ""), "")
+            + "[boundaries]\nground = \"rough\"\n"
+            + wall;
+        let e = error(&text);
+        assert!(e.contains("`bodies[0]`") && e.contains("boundaries.walls[0]"), "{e}");
+        // facing −x from x = 0.7 the plane clears the box and cuts the cylinder
+        let flipped = text
+            .replace("normal = [1.0, 0.0, 0.0]", "normal = [-1.0, 0.0, 0.0]")
+            .replace("point = [0.4, 0.0, 0.0]", "point = [0.7, 0.0, 0.0]");
+        let e = error(&flipped);
+        assert!(e.contains("`bodies[1]`"), "{e}");
+        let clear = text.replace("point = [0.4, 0.0, 0.0]", "point = [0.1, 0.0, 0.0]");
+        load_space_str(&clear, "test.toml").unwrap();
+    }
+
+    #[test]
+    fn a_bow_tie_prism_is_refused_at_its_vertex() {
+        let e = error(&scene(
+            (
+                "[[1.4, 0.0], [1.8, 0.0], [1.4, 0.4]]",
+                "[[1.4, 0.0], [1.8, 0.4], [1.8, 0.0], [1.4, 0.4]]",
+            ),
+            "",
+        ));
+        assert!(e.contains("bodies[2].vertices[") && e.contains("not simple"), "{e}");
+        // a closing vertex that repeats the first is an outline, not a crossing
+        let closed = scene(
+            (
+                "[[1.4, 0.0], [1.8, 0.0], [1.4, 0.4]]",
+                "[[1.4, 0.0], [1.8, 0.0], [1.4, 0.4], [1.4, 0.0]]",
+            ),
+            "",
+        );
+        load_space_str(&closed, "test.toml").unwrap();
+    }
+
+    #[test]
+    fn the_geostatic_state_is_refused_as_2d_only() {
+        let e = error(&scene(("", ""), "\n[initial_state]\nkind = \"geostatic\"\n"));
+        assert!(e.contains("`initial_state`") && e.contains("2D only"), "{e}");
+    }
+
+    #[test]
+    fn walls_beside_periodic_sides_are_refused_at_the_walls() {
+        let e = error(&scene(
+            ("ground = \"rough\"\n", "ground = \"rough\"\nperiodic = true\n"),
+            "\n[[boundaries.walls]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\n\
+             law = \"rough\"\n",
+        ));
+        assert!(e.contains("`boundaries.walls`"), "{e}");
+    }
+
+    /// The warnings are the 2D ones over the six faces and the materials, with the 3D one of
+    /// a plane-strain cone; `silence` removes them by name and refuses an unknown name.
+    #[test]
+    fn plausibility_warnings_and_silence_work_in_3d() {
+        let warned = |text: &str| -> Vec<String> {
+            let s = load_space_str(text, "test.toml").unwrap();
+            s.warnings.iter().map(|w| w.name.clone()).collect()
+        };
+        let slip = scene(("ground = \"rough\"", "ground = { friction = 30.0 }"), "");
+        assert_eq!(warned(&slip), ["friction_as_degrees"]);
+        let cone = scene(("cone_match = \"outer\"\n", ""), "");
+        assert_eq!(warned(&cone), ["plane_strain_cone_in_3d"]);
+        let quiet = format!("silence = [\"plane_strain_cone_in_3d\"]\n{cone}");
+        assert!(warned(&quiet).is_empty());
+        let e = error(&format!("silence = [\"friction\"]\n{cone}"));
+        assert!(e.contains("silence[0]"), "{e}");
+    }
+
+    #[test]
+    fn the_runout_direction_is_made_horizontal_and_checked() {
+        let s = load_space_str(&scene(("", ""), ""), "test.toml").unwrap();
+        assert_eq!(s.runout_direction, mpm_solver3d::Vector::X);
+        let text = scene(("", ""), "\n[output]\nrunout_direction = [0.0, 5.0, -2.0]\n");
+        let s = load_space_str(&text, "test.toml").unwrap();
+        assert_eq!(s.runout_direction, mpm_solver3d::Vector::NEG_Z);
+        let e = error(&scene(("", ""), "\n[output]\nrunout_direction = [0.0, 1.0, 0.0]\n"));
+        assert!(e.contains("`output.runout_direction`"), "{e}");
+        // a 2D section runs along x: the field is refused there
+        let flume = crate::validate::load_scene_str(
+            crate::scenes::embedded_scene("flume").unwrap(),
+            "flume",
+        )
+        .unwrap();
+        let e = flume.modified(|f| f.output.runout_direction = Some([1.0, 0.0, 0.0])).unwrap_err();
+        assert!(e.to_string().contains("`output.runout_direction`"), "{e}");
+    }
 }
