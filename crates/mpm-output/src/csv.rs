@@ -165,12 +165,29 @@ pub fn section(s: &mut String, stations: &[mpm_dem::Station]) {
 }
 
 /// header line of `envelope.csv`: per ground station (column centre x), the maxima over the
-/// run and the first arrival (empty: never reached).
+/// run and the first arrival (empty: never reached); over a DEM section, [`MAP_COLUMNS`]
+/// follow.
 pub const ENVELOPE_HEADER: &str =
     "x,ground,max_thickness,max_mean_speed,max_speed,max_pressure,arrival_time\n";
 
-/// appends the stations of `e` to `s`.
-pub fn envelope(s: &mut String, e: &mpm_scene::envelope::Envelope) {
+/// The columns `envelope.csv` and `deposit.csv` end with when the ground is a DEM section: the
+/// station's map x and y.
+pub const MAP_COLUMNS: &str = ",map_x,map_y";
+
+/// `header` (one of the headers above) with [`MAP_COLUMNS`] when there is a `section`.
+pub fn header(header: &str, section: Option<&mpm_scene::SectionLine>) -> String {
+    match section {
+        Some(_) => format!("{}{MAP_COLUMNS}\n", header.trim_end()),
+        None => header.to_string(),
+    }
+}
+
+/// appends the stations of `e` to `s`, placed on the map along `section` when there is one.
+pub fn envelope(
+    s: &mut String,
+    e: &mpm_scene::envelope::Envelope,
+    section: Option<&mpm_scene::SectionLine>,
+) {
     for p in &e.stations {
         let _ = write!(
             s,
@@ -180,19 +197,30 @@ pub fn envelope(s: &mut String, e: &mpm_scene::envelope::Envelope) {
         if let Some(t) = p.arrival {
             let _ = write!(s, "{t}");
         }
-        s.push('\n');
+        end_row(s, p.x, section);
     }
 }
 
 /// header line of `deposit.csv`: the final deposit's thickness normal to the ground per
-/// station.
+/// station; over a DEM section, [`MAP_COLUMNS`] follow.
 pub const DEPOSIT_HEADER: &str = "x,ground,thickness\n";
 
-/// appends the deposit's (x, ground, thickness) rows to `s`.
-pub fn deposit(s: &mut String, rows: &[(f64, f64, f64)]) {
+/// appends the deposit's (x, ground, thickness) rows to `s`, placed on the map along
+/// `section` when there is one.
+pub fn deposit(s: &mut String, rows: &[(f64, f64, f64)], section: Option<&mpm_scene::SectionLine>) {
     for (x, g, h) in rows {
-        let _ = writeln!(s, "{x},{g},{h}");
+        let _ = write!(s, "{x},{g},{h}");
+        end_row(s, *x, section);
     }
+}
+
+/// ends a row: `,map_x,map_y` of station `x` when there is a section.
+fn end_row(s: &mut String, x: f64, section: Option<&mpm_scene::SectionLine>) {
+    if let Some(line) = section {
+        let [mx, my] = line.map(x);
+        let _ = write!(s, ",{mx},{my}");
+    }
+    s.push('\n');
 }
 
 #[cfg(test)]

@@ -10,18 +10,22 @@ pub const LOCK_FILE: &str = ".mpm.lock";
 
 /// The files a run writes into its output directory (besides `frames/particles_*.vtp` and
 /// temporary `.NAME.tmp-PID.EXT` files): what `--force` removes.
-const RUN_FILES: [&str; 11] = [
+const RUN_FILES: [&str; 15] = [
     "scene.toml",
     "summary.json",
     "particles.pvd",
     "energy.csv",
     "probes.csv",
     "runout.csv",
+    "envelope.csv",
+    "deposit.csv",
+    "section.geojson",
     crate::checkpoint::FILE_NAME,
     "plots/energy.png",
     "plots/probes.png",
     "plots/runout.png",
     "plots/deposit.png",
+    "plots/envelope.png",
 ];
 
 /// One run per output directory: a lock file created atomically (a hard link of a file that

@@ -484,12 +484,16 @@ impl Driver<'_> {
         let (Some(dir), Some(e)) = (self.dir, &self.history.envelope) else { return Ok(()) };
         let r = self.scene.resolved();
         let deposit = envelope::deposit(e, r.spacing, &Flow::of(r, solver.particles()).position);
-        let mut s = csv::ENVELOPE_HEADER.to_string();
-        csv::envelope(&mut s, e);
+        let section = r.section.as_ref();
+        let mut s = csv::header(csv::ENVELOPE_HEADER, section);
+        csv::envelope(&mut s, e, section);
         atomic::write(&dir.join("envelope.csv"), s.as_bytes())?;
-        let mut s = csv::DEPOSIT_HEADER.to_string();
-        csv::deposit(&mut s, &deposit);
+        let mut s = csv::header(csv::DEPOSIT_HEADER, section);
+        csv::deposit(&mut s, &deposit, section);
         atomic::write(&dir.join("deposit.csv"), s.as_bytes())?;
+        if let Some(line) = section {
+            atomic::write(&dir.join("section.geojson"), section_geojson(line).as_bytes())?;
+        }
         if r.output.plots {
             report::envelope(&dir.join("plots"), e, &deposit)?;
         }
@@ -703,4 +707,20 @@ impl<'a> Driver<'a> {
         }
         Ok(summary)
     }
+}
+
+/// The section a DEM scene runs along as a GeoJSON feature collection: the line from `from` to
+/// `to` in the DEM's map coordinates (no CRS member: a GIS must be given the DEM's), with the
+/// DEM's name and the line's length.
+pub(crate) fn section_geojson(line: &mpm_scene::SectionLine) -> String {
+    let length = (line.to[0] - line.from[0]).hypot(line.to[1] - line.from[1]);
+    let doc = serde_json::json!({
+        "type": "FeatureCollection",
+        "features": [{
+            "type": "Feature",
+            "properties": { "name": "section", "dem": line.dem, "length_m": length },
+            "geometry": { "type": "LineString", "coordinates": [line.from, line.to] },
+        }],
+    });
+    format!("{doc:#}\n")
 }

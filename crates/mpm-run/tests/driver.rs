@@ -174,3 +174,80 @@ fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
     assert_eq!(runout(&part_dir), runout(&whole_dir), "runout.csv as in one go");
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// A 2D section of a DEM puts its stations on the map: `envelope.csv` and `deposit.csv` carry
+/// each station's map x and y, which lie on the section line at their station's distance from
+/// its start (the section runs obliquely, 100 m from (5, 5) to (65, 85), over a plane tilted
+/// along map x), and `section.geojson` holds that line. Tolerance: a point computed as
+/// from + s·(to − from)/|to − from|, so round-off of a few ulps of 100 m.
+#[test]
+fn a_dem_section_writes_its_stations_map_coordinates() {
+    let dir = std::env::temp_dir().join(format!("mpm-section-map-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 80 × 100 cells of 1 m, z = 100 − 0.5 x
+    let mut asc = String::from("ncols 80\nnrows 100\nxllcorner 0\nyllcorner 0\ncellsize 1\n");
+    for _ in 0..100 {
+        let row: Vec<String> =
+            (0..80).map(|c| format!("{}", 100.0 - 0.5 * (c as f64 + 0.5))).collect();
+        asc.push_str(&row.join(" "));
+        asc.push('\n');
+    }
+    std::fs::write(dir.join("plane.asc"), asc).unwrap();
+    // along the section z = 97.5 − 0.3 s; a 10 m release 2 m deep between s = 20 and 30
+    let scene = r#"
+[grid]
+kind = "terrain"
+cell_width = 1.0
+row_height = 1.0
+rows = 8
+profile = { dem = "plane.asc", from = [5.0, 5.0], to = [65.0, 85.0] }
+rupture_surface = [[20.0, 91.5], [25.0, 88.0], [30.0, 88.5]]
+[materials.sand]
+kind = "elastic"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+[[bodies]]
+material = "sand"
+shape = "between_profiles"
+top = { dem = "plane.asc", from = [5.0, 5.0], to = [65.0, 85.0] }
+bottom = [[20.0, 91.5], [25.0, 88.0], [30.0, 88.5]]
+[boundaries]
+ground = "rough"
+[solver]
+end_time = 0.02
+[output]
+vtk = false
+plots = false
+envelope = true
+"#;
+    let scene = mpm_scene::load_scene_str_in(scene, "section.toml", &dir).unwrap();
+    let out = dir.join("out");
+    let opts = RunOptions { out_dir: Some(out.clone()), force: true, ..Default::default() };
+    run_scene(&scene, &opts).unwrap();
+    let on_line = |x: f64, mx: f64, my: f64| {
+        let expect = [5.0 + 0.6 * x, 5.0 + 0.8 * x];
+        assert!((mx - expect[0]).abs() < 1e-12 && (my - expect[1]).abs() < 1e-12, "{x}: {mx} {my}");
+    };
+    for (file, width) in [("envelope.csv", 9), ("deposit.csv", 5)] {
+        let text = std::fs::read_to_string(out.join(file)).unwrap();
+        let mut lines = text.lines();
+        assert!(lines.next().unwrap().ends_with(",map_x,map_y"), "{file}");
+        let mut rows = 0;
+        for line in lines {
+            let f: Vec<&str> = line.split(',').collect();
+            assert_eq!(f.len(), width, "{file}: {line}");
+            let num = |k: usize| f[k].parse::<f64>().unwrap();
+            on_line(num(0), num(width - 2), num(width - 1));
+            rows += 1;
+        }
+        assert!(rows >= 50, "{file}: {rows} stations over the 100 m section");
+    }
+    let geo: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("section.geojson")).unwrap())
+            .unwrap();
+    let coords = &geo["features"][0]["geometry"]["coordinates"];
+    assert_eq!(coords, &serde_json::json!([[5.0, 5.0], [65.0, 85.0]]));
+    assert_eq!(geo["features"][0]["properties"]["length_m"], 100.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -55,7 +55,7 @@ pub use ground::{ground_height, segment_at, surface};
 pub use scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION,
     GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
-    ResolvedOutput, Scene, Seed, StopAtRest, Warning, fnv1a,
+    ResolvedOutput, Scene, SectionLine, Seed, StopAtRest, Warning, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use space::{SpaceScene, declared_dimension, dispatch_space};

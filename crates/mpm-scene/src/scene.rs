@@ -161,6 +161,31 @@ pub struct Resolved {
     pub stop_at_rest: Option<StopAtRest>,
     /// how the initial stresses are found.
     pub initial_state: InitialState,
+    /// the map line of a terrain grid whose profile is a DEM section; `None` otherwise.
+    pub section: Option<SectionLine>,
+}
+
+/// The map line a DEM section runs along (`grid.profile = { dem, from, to }`): the scene's x
+/// is the distance along it from `from` (the station), so x stands at
+/// `from + x (to − from) / |to − from|` on the map, as `mpm_dem::Raster::section` places its
+/// stations.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionLine {
+    /// the DEM file as the scene names it.
+    pub dem: String,
+    /// the section's start, map (x, y) (m).
+    pub from: [f64; 2],
+    /// its end, map (x, y) (m).
+    pub to: [f64; 2],
+}
+
+impl SectionLine {
+    /// the map (x, y) of station `x` (m along the line from `from`).
+    pub fn map(&self, x: f64) -> [f64; 2] {
+        let (dx, dy) = (self.to[0] - self.from[0], self.to[1] - self.from[1]);
+        let t = x / dx.hypot(dy);
+        [self.from[0] + t * dx, self.from[1] + t * dy]
+    }
 }
 
 /// How a new run finds its initial stresses (`[initial_state]`); a resumed run has them.

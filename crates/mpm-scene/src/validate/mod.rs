@@ -353,5 +353,14 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         max_steps: settings.max_steps,
         stop_at_rest: settings.stop_at_rest,
         initial_state,
+        section: match &f.grid.profile {
+            Some(crate::file::PolylineSpec::File(crate::file::PolylineFile {
+                dem: Some(dem),
+                from: Some(from),
+                to: Some(to),
+                ..
+            })) => Some(crate::scene::SectionLine { dem: dem.clone(), from: *from, to: *to }),
+            _ => None,
+        },
     })
 }
