@@ -608,6 +608,18 @@ fn print_summary(s: &RunSummary, out: &Path) {
             100.0 * i.stop_fraction
         ))
     );
+    if let Some(h) = &s.hazard_maps {
+        eprintln!(
+            "mpm: hazard maps (maps/): affected area {:.4} m², deposit {:.4} m³ over {:.4} m² \
+             (deepest {:.3} m), largest flow height {:.3} m, largest impact pressure {:.4e} Pa",
+            h.affected_area,
+            h.deposit_volume,
+            h.deposit_area,
+            h.max_deposit_depth,
+            h.max_flow_height,
+            h.max_pressure
+        );
+    }
     if let Some(o) = &s.observed {
         eprintln!(
             "mpm: against the observed deposit ({}): front {:+.3} m, tail {:+.3} m, RMS \

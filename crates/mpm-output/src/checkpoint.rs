@@ -34,8 +34,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// the four plane-strain components; 5: a Drucker-Prager material that does not harden stores
 /// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse; 7: the history
 /// carries the hazard envelopes; 8: the dissipation and the energy rows carry the transfer
-/// dissipation, the solver settings the PIC share and the separation density).
-pub const FORMAT: u32 = 8;
+/// dissipation, the solver settings the PIC share and the separation density; 9: the history
+/// carries a 3D run's hazard maps).
+pub const FORMAT: u32 = 9;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -214,6 +215,9 @@ pub struct History {
     /// the hazard envelopes so far, when the scene asks for them.
     #[serde(default)]
     pub envelope: Option<mpm_scene::envelope::Envelope>,
+    /// a 3D run's hazard maps so far, when the scene asks for them.
+    #[serde(default)]
+    pub plan: Option<mpm_scene::plan::PlanEnvelope>,
 }
 
 #[cfg(test)]

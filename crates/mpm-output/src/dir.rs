@@ -195,6 +195,11 @@ fn remove_run_files(dir: &Path) {
     for name in RUN_FILES {
         let _ = std::fs::remove_file(dir.join(name));
     }
+    for (name, _) in crate::maps::MAPS {
+        for ext in ["asc", "tif"] {
+            let _ = std::fs::remove_file(dir.join("maps").join(format!("{name}.{ext}")));
+        }
+    }
     for sub in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
         let Ok(entries) = std::fs::read_dir(&sub) else { continue };
         for e in entries.flatten() {

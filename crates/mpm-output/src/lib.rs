@@ -17,6 +17,7 @@ pub mod atomic;
 pub mod checkpoint;
 pub mod csv;
 pub mod dir;
+pub mod maps;
 pub mod plots;
 pub mod report;
 pub mod vtk;

@@ -473,6 +473,7 @@ impl Driver<'_> {
             initial_state: self.initial.clone(),
             warnings: r.warnings.iter().map(ToString::to_string).collect(),
             dimension: 2,
+            hazard_maps: None,
         }
     }
 

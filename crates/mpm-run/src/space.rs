@@ -23,8 +23,9 @@ use mpm_grid3d::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History, state_hash};
 use mpm_output::csv::{self, EnergyRow};
 use mpm_output::dir::prepare_dir;
-use mpm_output::{OutputError, atomic, report, vtk};
+use mpm_output::{OutputError, atomic, maps, report, vtk};
 use mpm_scene::dispatch::SceneModel;
+use mpm_scene::plan::PlanEnvelope;
 use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
@@ -234,6 +235,8 @@ enum Stop {
 
 struct SpaceDriver<'a> {
     scene: &'a SpaceScene,
+    /// the hazard maps so far (`[output] hazard_maps`), observed every step.
+    plan: Option<PlanEnvelope>,
     /// when this session started, and at which step.
     session: (Instant, u64),
     /// wall time (s) and particle-steps of earlier sessions (a resumed run's).
@@ -300,8 +303,16 @@ impl<'a> SpaceDriver<'a> {
             .map(|(x, m)| *x * *m)
             .sum::<mpm_solver3d::Vector>()
             / mass;
+        let plan = scene.output.hazard_maps.then(|| {
+            let [nx, _, nz] = g.cells();
+            let mut e = PlanEnvelope::new(lo, g.cell_size().x, [nx, nz]);
+            let spacing = g.cell_size().x / scene.gimp_ppc as f64;
+            observe(&mut e, scene, spacing, solver);
+            e
+        });
         let mut d = SpaceDriver {
             scene,
+            plan,
             session: (Instant::now(), solver.step_count()),
             earlier: (0.0, 0.0),
             checkpoint_slot: 0,
@@ -347,6 +358,9 @@ impl<'a> SpaceDriver<'a> {
                 };
             }
             d.alarm_time = h.alarm_time;
+            if d.plan.is_some() {
+                d.plan = h.plan;
+            }
             // the rest watch as the rows left it
             let rows: Vec<(f64, f64)> =
                 d.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
@@ -385,6 +399,7 @@ impl<'a> SpaceDriver<'a> {
             }),
             alarm_time: self.alarm_time,
             envelope: None,
+            plan: self.plan.clone(),
         }
     }
 
@@ -626,11 +641,24 @@ impl<'a> SpaceDriver<'a> {
             initial_state: None,
             warnings: scene.warnings.iter().map(ToString::to_string).collect(),
             dimension: 3,
+            hazard_maps: None,
         };
+        let mut summary = summary;
+        let deposit = self.plan.as_ref().map(|e| {
+            let flow: Vec<mpm_solver3d::Vector> =
+                flowing(scene, p).map(|q| p.position[q]).collect();
+            e.deposit(self.spacing, &flow)
+        });
+        if let (Some(e), Some(depth)) = (&self.plan, &deposit) {
+            summary.hazard_maps = Some(e.indicators(depth));
+        }
         if let Some(dir) = self.dir {
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+            if let (Some(e), Some(depth)) = (&self.plan, &deposit) {
+                maps::write(dir, e, depth)?;
+            }
             if scene.output.plots {
                 let plan = |v: &[mpm_solver3d::Vector]| v.iter().map(|x| (x.x, x.z)).collect();
                 let deposit = report::PlanDeposit {
@@ -656,6 +684,9 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
             self.dt.first = report.dt;
         }
         let t = report.time;
+        if let Some(e) = &mut self.plan {
+            observe(e, scene, self.spacing, solver);
+        }
         let series = slot(t, scene.output.series_interval);
         if series > self.series_slot {
             self.series_slot = series;
@@ -692,4 +723,40 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         }
         ControlFlow::Continue(())
     }
+}
+
+/// the indices of the particles of flowing materials (not obstacles; as the runout measures).
+fn flowing<'p, S>(
+    scene: &SpaceScene,
+    p: &'p mpm_solver3d::Particles<S>,
+) -> impl Iterator<Item = usize> + 'p {
+    let mask = scene.materials.flow_mask();
+    (0..p.len()).filter(move |&q| {
+        mask.as_ref().is_none_or(|m| m.get(usize::from(p.material[q])).copied().unwrap_or(true))
+    })
+}
+
+/// takes the flowing particles' state now into the hazard maps `e`.
+fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    e: &mut PlanEnvelope,
+    scene: &SpaceScene,
+    spacing: f64,
+    solver: &Solver<M, S, N>,
+) {
+    let p = solver.particles();
+    if scene.materials.flow_mask().is_none() {
+        e.observe(solver.time(), spacing, [&p.position, &p.velocity], [&p.mass, &p.volume]);
+        return;
+    }
+    let keep: Vec<usize> = flowing(scene, p).collect();
+    let pick = |v: &[mpm_solver3d::Vector]| -> Vec<mpm_solver3d::Vector> {
+        keep.iter().map(|&q| v[q]).collect()
+    };
+    let pick_f = |v: &[f64]| -> Vec<f64> { keep.iter().map(|&q| v[q]).collect() };
+    e.observe(
+        solver.time(),
+        spacing,
+        [&pick(&p.position), &pick(&p.velocity)],
+        [&pick_f(&p.mass), &pick_f(&p.volume)],
+    );
 }

@@ -134,6 +134,7 @@ end_time = 0.12
 [output]
 interval = 0.03
 checkpoint_interval = 0.05
+hazard_maps = true
 "#;
 
 /// A 3D run stopped part-way writes a checkpoint, and `resume` continues it to the bits of the
@@ -172,7 +173,84 @@ fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
     assert_eq!(energy(&part_dir), energy(&whole_dir), "energy.csv as in one go");
     let runout = |d: &std::path::Path| std::fs::read_to_string(d.join("runout.csv")).unwrap();
     assert_eq!(runout(&part_dir), runout(&whole_dir), "runout.csv as in one go");
+    assert_eq!(resumed.hazard_maps, whole.hazard_maps);
+    for map in ["max_height", "max_pressure", "arrival_time", "deposit_depth"] {
+        let read = |d: &std::path::Path| std::fs::read(d.join(format!("maps/{map}.tif"))).unwrap();
+        assert_eq!(read(&part_dir), read(&whole_dir), "maps/{map}.tif as in one go");
+    }
     std::fs::remove_dir_all(&base).unwrap();
+}
+
+/// Hazard maps of a 0.4 × 0.2 × 0.4 m elastic block sliding without gravity at 2 m/s along x
+/// over a frictionless floor (a rigid translation): every plan cell it passes sees the height
+/// 0.2 m (its top particles' centres plus half a spacing), speeds of 2 m/s, ρ u² = 6 400 Pa
+/// and h u = 0.4 m²/s; it arrives at the first step after its front particle's centre reaches
+/// the cell; the final deposit covers 0.4 × 0.4 m² at 0.2 m (0.032 m³) and the swept area is
+/// 1.4 × 0.4 m². Tolerance 1e-9: the velocity field stays uniform to round-off.
+#[test]
+fn a_rigidly_sliding_block_draws_exact_hazard_maps() {
+    let text = r#"
+[grid]
+dimension = 3
+kind = "regular"
+origin = [0.0, 0.0, 0.0]
+cell = [0.1, 0.1, 0.1]
+cells = [20, 4, 10]
+[materials.block]
+kind = "elastic"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+[[bodies]]
+material = "block"
+shape = "box"
+min = [0.2, 0.0, 0.3]
+max = [0.6, 0.2, 0.7]
+velocity = [2.0, 0.0, 0.0]
+[boundaries]
+ground = "frictionless"
+[solver]
+gravity = [0.0, 0.0, 0.0]
+end_time = 0.5
+[output]
+vtk = false
+plots = false
+hazard_maps = true
+"#;
+    let scene = mpm_scene::load_space_str(text, "slide").unwrap();
+    let dir = std::env::temp_dir().join(format!("mpm-hazard3d-{}", std::process::id()));
+    let s = mpm_run::run_space_scene(
+        &scene,
+        &RunOptions { out_dir: Some(dir.clone()), force: true, ..Default::default() },
+    )
+    .unwrap();
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let h = s.hazard_maps.unwrap();
+    assert!(near(h.affected_area, 0.56) && near(h.deposit_area, 0.16), "{h:?}");
+    assert!(near(h.deposit_volume, 0.032) && near(h.max_deposit_depth, 0.2), "{h:?}");
+    assert!(near(h.max_flow_height, 0.2) && near(h.max_pressure, 6400.0), "{h:?}");
+    let map = |name: &str| mpm_dem::Raster::read(&dir.join(format!("maps/{name}.asc"))).unwrap();
+    let (height, speed, momentum, arrival) =
+        (map("max_height"), map("max_mean_speed"), map("max_momentum"), map("arrival_time"));
+    for row in 0..10 {
+        for col in 0..20 {
+            let k = row * 20 + col;
+            let z = (row as f64 + 0.5) * 0.1;
+            let x = col as f64 * 0.1;
+            if !(0.3..0.7).contains(&z) || !(0.2..1.6).contains(&(x + 0.05)) {
+                assert_eq!(height.heights()[k], 0.0, "({col}, {row}) untouched");
+                assert_eq!(arrival.heights()[k], mpm_output::maps::NODATA);
+                continue;
+            }
+            assert!(near(height.heights()[k], 0.2), "({col}, {row}): {}", height.heights()[k]);
+            assert!(near(speed.heights()[k], 2.0) && near(momentum.heights()[k], 0.4));
+            // the front particle's centre, 0.575 m at t = 0, reaches x at (x − 0.575) / 2
+            let reach = ((x - 0.575) / 2.0).max(0.0);
+            let t = arrival.heights()[k];
+            assert!(t >= reach - 1e-9 && t < reach + s.dt.max + 1e-9, "({col}, {row}): {t}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A 2D section of a DEM puts its stations on the map: `envelope.csv` and `deposit.csv` carry

@@ -617,6 +617,9 @@ pub struct OutputSpec {
     /// vertical component is dropped); default the horizontal part of gravity, else +x.
     #[serde(default, deserialize_with = "exact::triple", skip_serializing_if = "Option::is_none")]
     pub runout_direction: Option<[f64; 3]>,
+    /// 3D only: hazard maps per plan cell (`maps/*.asc` and `maps/*.tif`), default false.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hazard_maps: Option<bool>,
 }
 
 /// `[output] observed = { deposit = "observed.csv" }`.

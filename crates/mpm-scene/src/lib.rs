@@ -41,6 +41,7 @@ mod ground;
 pub mod limits;
 pub mod materials;
 pub mod observed;
+pub mod plan;
 pub mod presets;
 mod scene;
 mod scenes;

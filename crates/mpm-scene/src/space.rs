@@ -68,6 +68,9 @@ pub struct SpaceOutput {
     pub plots: bool,
     /// simulated time between checkpoints (s); a checkpoint is also written on an interrupt.
     pub checkpoint_interval: Option<f64>,
+    /// whether hazard maps are observed every step and written at the end
+    /// ([`crate::plan::PlanEnvelope`]).
+    pub hazard_maps: bool,
 }
 
 /// One 3D material point before the constitutive state is attached.

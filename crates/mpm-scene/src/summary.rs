@@ -167,6 +167,9 @@ pub struct RunSummary {
     /// 2 (plane strain: energies in J per metre of thickness) or 3 (energies in J).
     #[serde(default = "plane")]
     pub dimension: u8,
+    /// a 3D run's plan indicators, when it draws hazard maps (`[output] hazard_maps`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hazard_maps: Option<crate::plan::PlanIndicators>,
 }
 
 /// the dimension of a summary written before 3D scenes existed.

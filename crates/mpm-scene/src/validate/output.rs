@@ -21,6 +21,15 @@ pub(super) fn build(
     boundaries: &Boundaries,
     gravity: Vector,
 ) -> Result<ResolvedOutput, SceneError> {
+    if o.hazard_maps == Some(true) {
+        return Err(ctx.err(
+            "output.hazard_maps",
+            Some("true".into()),
+            "hazard maps are drawn in plan, from a 3D run",
+            "`hazard_maps` in a 3D scene; in 2D, `envelope = true`",
+            "use `envelope = true` (per ground station along the section)",
+        ));
+    }
     if let Some(d) = o.runout_direction {
         return Err(ctx.err(
             "output.runout_direction",

@@ -637,7 +637,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
             None,
             "this output is not available in 3D scenes yet",
             "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots, \
-             runout_direction",
+             runout_direction, hazard_maps",
             "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
              summary.json)",
         ));
@@ -673,6 +673,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
         plots: o.plots.unwrap_or(true),
         checkpoint_interval: o.checkpoint_interval,
+        hazard_maps: o.hazard_maps.unwrap_or(false),
     })
 }
 

@@ -1,0 +1,108 @@
+//! The hazard maps of a 3D run (`[output] hazard_maps = true`): one raster per quantity of
+//! [`mpm_scene::plan::PlanEnvelope`], each written as an ESRI ASCII grid (`maps/NAME.asc`) and a
+//! GeoTIFF (`maps/NAME.tif`), in the plan frame that module states (map x = x, map y = −z; no
+//! CRS: a regular grid has no georeference).
+
+use std::path::Path;
+
+use mpm_dem::Raster;
+use mpm_scene::plan::{PlanCell, PlanEnvelope};
+
+use crate::OutputError;
+
+/// What a cell holds where no material ever came, in the arrival map (the others hold 0).
+pub const NODATA: f64 = -9999.0;
+
+/// The maps, by file name (without extension), with what each holds.
+pub const MAPS: [(&str, &str); 7] = [
+    ("max_height", "largest flow height above the floor (m)"),
+    ("max_mean_speed", "largest depth-averaged speed |Σmv|/Σm (m/s)"),
+    ("max_speed", "largest particle speed (m/s)"),
+    ("max_pressure", "largest impact pressure ρ̄ū² (Pa)"),
+    ("max_momentum", "largest momentum h·ū (m²/s)"),
+    ("arrival_time", "first arrival (s); −9999 where never reached"),
+    ("deposit_depth", "final deposit depth (m)"),
+];
+
+/// writes every map of `plan` and the final `deposit` depths into `dir/maps/`.
+pub fn write(dir: &Path, plan: &PlanEnvelope, deposit: &[f64]) -> Result<(), OutputError> {
+    let maps = dir.join("maps");
+    std::fs::create_dir_all(&maps)
+        .map_err(|source| OutputError::Io { path: maps.clone(), source })?;
+    let field = |f: fn(&PlanCell) -> f64| -> Vec<f64> { plan.cells.iter().map(f).collect() };
+    for (name, _) in MAPS {
+        let values = match name {
+            "max_height" => field(|c| c.max_height),
+            "max_mean_speed" => field(|c| c.max_mean_speed),
+            "max_speed" => field(|c| c.max_speed),
+            "max_pressure" => field(|c| c.max_pressure),
+            "max_momentum" => field(|c| c.max_momentum),
+            "arrival_time" => field(|c| c.arrival.unwrap_or(NODATA)),
+            _ => deposit.to_vec(),
+        };
+        let nodata = (name == "arrival_time").then_some(NODATA);
+        // rows from the north (−z): the plan's rows in z order
+        let raster = Raster::new(
+            name,
+            [plan.cols, plan.rows],
+            plan.cell,
+            [plan.x0, -plan.z0],
+            values,
+            nodata,
+        )
+        .map_err(|e| fail(&maps.join(name), e))?;
+        for (ext, write) in [
+            ("asc", mpm_dem::ascii::write as fn(&Raster, &Path) -> Result<(), mpm_dem::DemError>),
+            ("tif", mpm_dem::geotiff::write),
+        ] {
+            let path = maps.join(format!("{name}.{ext}"));
+            write(&raster, &path).map_err(|e| fail(&path, e))?;
+        }
+    }
+    Ok(())
+}
+
+fn fail(path: &Path, e: mpm_dem::DemError) -> OutputError {
+    OutputError::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mpm_solver3d::Vector;
+
+    /// The maps read back (ESRI ASCII and GeoTIFF, through `mpm-dem`'s readers) are the plan's
+    /// values at the right map places: cell (col, row) of the plan is the raster cell whose
+    /// centre is at map (x0 + (col + ½) w, −(z0 + (row + ½) w)).
+    #[test]
+    fn maps_read_back_hold_the_plan_at_its_map_places() {
+        let mut plan = PlanEnvelope::new(Vector::new(10.0, 0.0, 20.0), 0.5, [4, 3]);
+        for (k, c) in plan.cells.iter_mut().enumerate() {
+            c.max_height = k as f64;
+            c.arrival = (k % 2 == 0).then_some(0.1 * k as f64);
+        }
+        let deposit: Vec<f64> = (0..12).map(|k| 0.01 * k as f64).collect();
+        let dir = std::env::temp_dir().join(format!("mpm-maps-{}", std::process::id()));
+        write(&dir, &plan, &deposit).unwrap();
+        for ext in ["asc", "tif"] {
+            let read = |name: &str| {
+                let path = dir.join("maps").join(format!("{name}.{ext}"));
+                Raster::read(&path).unwrap()
+            };
+            let (h, a, d) = (read("max_height"), read("arrival_time"), read("deposit_depth"));
+            // west, south, east, north: x from 10 m, map y from −z: −20 m down to −21.5 m
+            assert_eq!(h.extent(), [10.0, -21.5, 12.0, -20.0], "{ext}");
+            for row in 0..3 {
+                for col in 0..4 {
+                    // raster rows from the north are the plan's rows in z order
+                    let k = row * 4 + col;
+                    assert_eq!(h.heights()[k], k as f64, "{ext} ({col}, {row})");
+                    assert_eq!(d.heights()[k], 0.01 * k as f64);
+                    assert_eq!(a.heights()[k], plan.cells[k].arrival.unwrap_or(NODATA));
+                }
+            }
+            assert_eq!(a.nodata(), Some(NODATA), "{ext}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
