@@ -645,7 +645,7 @@ pub fn oblique_normal() -> Vector {
 /// thrown at 2 m/s along +x, without gravity, into the plane through (1.3, 0.6, 0.6) with
 /// [`oblique_normal`] and Coulomb friction `mu` (0: frictionless), as the 2D check dam
 /// (`open_core::obstacle`) but with a plane no grid axis lies in. It approaches the plane at
-/// 1.68 m/s and hits it at about 0.3 s; the run ends at 0.5 s, after the rebound. The small-mass rule is off so that the balance isolates the wall's impulse.
+/// 1.74 m/s and hits it at about 0.3 s; the run ends at 0.5 s, after the rebound. The small-mass rule is off so that the balance isolates the wall's impulse.
 pub fn oblique_wall(kind: RegularShape, mu: f64) -> Result<ObliqueWall, CaseError> {
     let cell = 0.05;
     let grid = RegularGrid::new(Vector::ZERO, Vector::splat(cell), [36, 24, 24]).map_err(setup)?;

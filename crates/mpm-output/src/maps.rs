@@ -55,8 +55,14 @@ pub fn write(dir: &Path, plan: &PlanEnvelope, deposit: &[f64]) -> Result<(), Out
             ("asc", mpm_dem::ascii::write as fn(&Raster, &Path) -> Result<(), mpm_dem::DemError>),
             ("tif", mpm_dem::geotiff::write),
         ] {
+            // under a temporary name, then renamed: a crash leaves no truncated map
             let path = maps.join(format!("{name}.{ext}"));
-            write(&raster, &path).map_err(|e| fail(&path, e))?;
+            let tmp = crate::atomic::temp_path(&path);
+            write(&raster, &tmp).map_err(|e| {
+                let _ = std::fs::remove_file(&tmp);
+                fail(&path, e)
+            })?;
+            crate::atomic::commit(&tmp, &path)?;
         }
     }
     Ok(())

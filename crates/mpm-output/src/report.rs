@@ -38,11 +38,12 @@ pub fn plots(
     final_deposit(plot_dir, scene, deposit)
 }
 
-/// The particles of a 3D run in plan (x, z), for its deposit plot.
+/// The particles of a 3D run in plan, (x, −z) (north up, as the hazard maps), for its deposit
+/// plot.
 pub struct PlanDeposit {
-    /// final (x, z) (m).
+    /// final (x, −z) (m).
     pub positions: Vec<(f64, f64)>,
-    /// initial (x, z) (m).
+    /// initial (x, −z) (m).
     pub initial: Vec<(f64, f64)>,
     /// simulated time of the final positions (s).
     pub time: f64,
@@ -64,7 +65,7 @@ pub fn space_plots(
         &Chart {
             title: &title,
             x_label: "x (m)",
-            y_label: "z (m)",
+            y_label: "−z (m), north up as in maps/",
             size: (900, 900),
             equal_aspect: true,
         },

@@ -660,7 +660,10 @@ impl<'a> SpaceDriver<'a> {
                 maps::write(dir, e, depth)?;
             }
             if scene.output.plots {
-                let plan = |v: &[mpm_solver3d::Vector]| v.iter().map(|x| (x.x, x.z)).collect();
+                // the flowing particles, north (−z) up as in maps/
+                let plan = |v: &[mpm_solver3d::Vector]| {
+                    flowing(scene, p).map(|q| (v[q].x, -v[q].z)).collect()
+                };
                 let deposit = report::PlanDeposit {
                     positions: plan(&p.position),
                     initial: plan(&p.initial_position),

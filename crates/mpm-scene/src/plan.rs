@@ -40,7 +40,7 @@ pub struct PlanCell {
 
 /// The hazard maps of a run: `cols × rows` plan cells of side `cell` from (`x0`, `z0`), row by
 /// row along z.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PlanEnvelope {
     /// x of the first column's west edge (m).
     pub x0: f64,
@@ -56,10 +56,17 @@ pub struct PlanEnvelope {
     pub rows: usize,
     /// the cells, row by row (z), each row along x.
     pub cells: Vec<PlanCell>,
+    /// one observation's sums per cell, kept between observations (not part of the state:
+    /// every observation leaves it empty again).
+    #[serde(skip)]
+    scratch: Vec<Sums>,
+    /// the cells the current observation touched.
+    #[serde(skip)]
+    touched: Vec<u32>,
 }
 
 /// What one observation sums per cell.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Sums {
     top: f64,
     mass: f64,
@@ -67,6 +74,19 @@ struct Sums {
     momentum: Vector,
     max_speed: f64,
     count: usize,
+}
+
+impl Default for Sums {
+    fn default() -> Self {
+        Self {
+            top: f64::NEG_INFINITY,
+            mass: 0.0,
+            volume: 0.0,
+            momentum: Vector::ZERO,
+            max_speed: 0.0,
+            count: 0,
+        }
+    }
 }
 
 impl PlanEnvelope {
@@ -81,6 +101,8 @@ impl PlanEnvelope {
             cols,
             rows,
             cells: vec![PlanCell::default(); cols * rows],
+            scratch: Vec::new(),
+            touched: Vec::new(),
         }
     }
 
@@ -93,7 +115,8 @@ impl PlanEnvelope {
     }
 
     /// Takes the particles' state at `time` into the maxima. `spacing` is the particle spacing
-    /// (a particle's top is half of it above its centre).
+    /// (a particle's top is half of it above its centre). Costs the particles and the cells
+    /// they are in, not the plan's area.
     pub fn observe(
         &mut self,
         time: f64,
@@ -101,15 +124,20 @@ impl PlanEnvelope {
         [position, velocity]: [&[Vector]; 2],
         [mass, volume]: [&[f64]; 2],
     ) {
-        let mut sums =
-            vec![Sums { top: f64::NEG_INFINITY, ..Default::default() }; self.cells.len()];
+        if self.scratch.len() != self.cells.len() {
+            self.scratch = vec![Sums::default(); self.cells.len()];
+        }
+        self.touched.clear();
         for q in 0..position.len() {
             let (x, v) = (position[q], velocity[q]);
             if !(x.is_finite() && v.is_finite()) {
                 continue;
             }
             let Some(c) = self.index(x.x, x.z) else { continue };
-            let s = &mut sums[c];
+            let s = &mut self.scratch[c];
+            if s.count == 0 {
+                self.touched.push(c as u32);
+            }
             s.top = s.top.max(x.y + 0.5 * spacing - self.floor);
             s.mass += mass[q];
             s.volume += volume[q];
@@ -117,10 +145,9 @@ impl PlanEnvelope {
             s.max_speed = s.max_speed.max(v.length());
             s.count += 1;
         }
-        for (cell, s) in self.cells.iter_mut().zip(&sums) {
-            if s.count == 0 {
-                continue;
-            }
+        for &c in &self.touched {
+            let s = std::mem::take(&mut self.scratch[c as usize]);
+            let cell = &mut self.cells[c as usize];
             cell.arrival.get_or_insert(time);
             let height = s.top.max(0.0);
             let mean = if s.mass > 0.0 { s.momentum.length() / s.mass } else { 0.0 };

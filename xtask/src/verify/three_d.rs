@@ -244,7 +244,7 @@ fn oblique_walls(rows: &mut Rows) {
         }
         rows.at_least(
             (&case, "centre-of-mass velocity along n at the end (m/s)"),
-            "> 0 (rebound; approach −1.68)",
+            "> 0 (rebound; approach −1.74)",
             "impact",
             r.normal_velocity_end,
             0.0,

@@ -1,5 +1,5 @@
 //! The 3D scene file (`[grid] dimension = 3`): the same TOML format with 3-vectors, a regular
-//! grid, bodies as boxes, cylinders and prisms, and the grid's six faces as boundaries. The
+//! grid, bodies as boxes, cylinders and prisms, and the grid's faces as boundaries (not its top). The
 //! materials, `[solver]` and `[output]` tables are the 2D ones (`gravity` has three
 //! components).
 //!

@@ -50,7 +50,8 @@ pub(super) fn warnings(
     judge(ctx, &f.silence, laws, &f.materials, floorless && gravity > 0.0)
 }
 
-/// A 3D scene's warnings: the same names over its six faces, its walls and its materials.
+/// A 3D scene's warnings: the same names over its five faces, its walls and its materials (the
+/// cone warning only for materials a body uses).
 pub(super) fn space_warnings(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
@@ -70,8 +71,11 @@ pub(super) fn space_warnings(
     let mut out = judge(ctx, &f.silence, laws, &f.materials, floorless && gravity > 0.0)?;
     let name = "plane_strain_cone_in_3d";
     if !f.silence.iter().any(|s| s == name) {
+        let used = |m: &str| f.bodies.iter().any(|b| b.material == m);
         for (m, spec) in &f.materials {
-            if spec.kind() == Some("drucker_prager") && !spec.0.contains_key("cone_match") {
+            let plain_dp =
+                spec.kind() == Some("drucker_prager") && !spec.0.contains_key("cone_match");
+            if plain_dp && used(m) {
                 out.push(Warning {
                     name: name.into(),
                     field: format!("materials.{m}.cone_match"),

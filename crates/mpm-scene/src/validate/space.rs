@@ -1,5 +1,5 @@
 //! From a 3D scene's text (`[grid] dimension = 3`) to a [`SpaceScene`]: the grid, the bodies
-//! (boxes, cylinders, prisms), the six faces and walls as planes, and the solver settings; the
+//! (boxes, cylinders, prisms), the grid's five faces (the top is open) and walls as planes, and the solver settings; the
 //! materials and most of `[solver]` are checked by the 2D modules. Every refusal names its
 //! field, line and column, as in 2D.
 
@@ -127,7 +127,7 @@ fn runout_direction(ctx: &Ctx<'_>, f: &SpaceFile, gravity: Vector) -> Result<Vec
                 ctx.err(
                     "output.runout_direction",
                     Some(triple(d)),
-                    "no horizontal direction: x and z are zero or not finite",
+                    "no horizontal direction: x and z are both zero, or a component is not finite",
                     "[dx, dy, dz] with (dx, dz) finite and not both zero (dy is dropped)",
                     "give the way the flow runs in plan, e.g. `runout_direction = [1, 0, 0]`",
                 )
@@ -665,6 +665,25 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
             ));
         }
     }
+    let hazard_maps = o.hazard_maps.unwrap_or(false);
+    let [nx, _, nz] = f.grid.cells;
+    // per plan cell: its maxima (56 B) and one observation's sums (64 B)
+    let plan_bytes = (nx as f64) * (nz as f64) * 120.0;
+    let budget = crate::limits::available_memory().map_or(f64::INFINITY, |(b, _)| b as f64 / 4.0);
+    if hazard_maps && ((nx * nz) as f64 > mpm_dem::MAX_CELLS as f64 || plan_bytes > budget) {
+        return Err(ctx.err(
+            "output.hazard_maps",
+            Some("true".into()),
+            format!(
+                "the plan has {nx} × {nz} cells: its maps would take {:.1} GB (a raster has at \
+                 most {} cells)",
+                plan_bytes / 1e9,
+                mpm_dem::MAX_CELLS
+            ),
+            "a plan whose maps fit in a quarter of the memory and in one raster",
+            "coarsen the grid in plan or shrink it to the area the flow can reach",
+        ));
+    }
     Ok(SpaceOutput {
         interval,
         series_interval,
@@ -673,7 +692,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
         plots: o.plots.unwrap_or(true),
         checkpoint_interval: o.checkpoint_interval,
-        hazard_maps: o.hazard_maps.unwrap_or(false),
+        hazard_maps,
     })
 }
 
@@ -796,6 +815,18 @@ end_time = 0.1
         load_space_str(&closed, "test.toml").unwrap();
     }
 
+    /// A plan too large for one raster (2²⁸ cells) is refused when the scene loads, not after
+    /// the run; the same grid without hazard maps loads (the grid stores only nodes near
+    /// material).
+    #[test]
+    fn hazard_maps_of_a_plan_too_large_are_refused_at_load() {
+        let huge = scene(("cells = [20, 10, 10]", "cells = [20000, 10, 20000]"), "");
+        load_space_str(&huge, "test.toml").unwrap();
+        let e = error(&format!("{huge}\n[output]\nhazard_maps = true\n"));
+        assert!(e.contains("`output.hazard_maps`") && e.contains("20000 × 20000"), "{e}");
+        load_space_str(&scene(("", ""), "\n[output]\nhazard_maps = true\n"), "test.toml").unwrap();
+    }
+
     #[test]
     fn the_geostatic_state_is_refused_as_2d_only() {
         let e = error(&scene(("", ""), "\n[initial_state]\nkind = \"geostatic\"\n"));
@@ -812,7 +843,7 @@ end_time = 0.1
         assert!(e.contains("`boundaries.walls`"), "{e}");
     }
 
-    /// The warnings are the 2D ones over the six faces and the materials, with the 3D one of
+    /// The warnings are the 2D ones over the five faces and the materials, with the 3D one of
     /// a plane-strain cone; `silence` removes them by name and refuses an unknown name.
     #[test]
     fn plausibility_warnings_and_silence_work_in_3d() {
