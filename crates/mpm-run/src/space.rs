@@ -9,8 +9,8 @@
 //! the centre of mass's travel is its 3D distance. Checkpoints (every
 //! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
 //! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume`]
-//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit. The plots are the energy, the runout
-//! and the deposit in plan.
+//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit. The plots
+//! are the energy, the runout and the deposit in plan; `hazard_maps` adds the maps of `maps/`.
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -453,13 +453,7 @@ impl<'a> SpaceDriver<'a> {
     ) -> RunoutMetrics {
         let p = solver.particles();
         let d = self.scene.runout_direction;
-        let mask = self.scene.materials.flow_mask();
-        let keep: Vec<usize> = (0..p.len())
-            .filter(|&q| {
-                mask.as_ref()
-                    .is_none_or(|m| m.get(usize::from(p.material[q])).copied().unwrap_or(true))
-            })
-            .collect();
+        let keep: Vec<usize> = flowing(self.scene, p).collect();
         let plane = |v: &[mpm_solver3d::Vector]| -> Vec<DVec2> {
             keep.iter().map(|&q| DVec2::new(v[q].dot(d), v[q].y)).collect()
         };
@@ -603,7 +597,7 @@ impl<'a> SpaceDriver<'a> {
         let mut check = self.check;
         let wall = self.earlier.0 + self.wall_time;
         let particle_steps = self.earlier.1 + (steps - self.session.1) as f64 * n as f64;
-        let summary = RunSummary {
+        let mut summary = RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
             scene_origin: scene.origin().to_string(),
             scene_hash: format!("{:016x}", fnv1a(scene.text().as_bytes())),
@@ -643,7 +637,6 @@ impl<'a> SpaceDriver<'a> {
             dimension: 3,
             hazard_maps: None,
         };
-        let mut summary = summary;
         let deposit = self.plan.as_ref().map(|e| {
             let flow: Vec<mpm_solver3d::Vector> =
                 flowing(scene, p).map(|q| p.position[q]).collect();
