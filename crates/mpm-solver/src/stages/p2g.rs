@@ -236,10 +236,20 @@ fn scatter<
             let (m, v, f) = (mass[q], velocity[q], &factors[q]);
             let wq = shape.weights(f);
             let b = if FORCE && !body.is_empty() { g + body[q] } else { g };
+            // In 3D the tensor-product stencils form the forces with sums factorised per axis;
+            // in the plane each slot's force is formed where it is added (the same terms),
+            // which measured fewer instructions than an array of them (callgrind).
+            #[cfg(feature = "dim3")]
             let fq = if FORCE {
                 shape.nodal_forces(f, &wq, (m, b), volume[q], columns(&stress[q]))
             } else {
                 [Vector::ZERO; N]
+            };
+            #[cfg(not(feature = "dim3"))]
+            let (gq, [sx, sy], vol) = if FORCE {
+                (shape.gradients(f), columns(&stress[q]), volume[q])
+            } else {
+                ([Vector::ZERO; N], [Vector::ZERO; DIM], 0.0)
             };
             let (c_q, x0) =
                 if APIC { (affine[q], position[q] - dt_back * v) } else { Default::default() };
@@ -277,7 +287,11 @@ fn scatter<
                     sums.momentum += momentum;
                 }
                 if FORCE {
-                    sums.force += fq[k];
+                    #[cfg(feature = "dim3")]
+                    let force = fq[k];
+                    #[cfg(not(feature = "dim3"))]
+                    let force = mw * b - vol * (sx * gq[k].x + sy * gq[k].y);
+                    sums.force += force;
                 }
             }
         }
