@@ -13,6 +13,7 @@ use std::ops::ControlFlow;
 pub mod geostatic;
 pub mod manufactured;
 pub mod open_core;
+pub mod terrain3d;
 pub mod three_d;
 
 use mpm_constitutive::{ConstitutiveModel, LinearElastic, PlaneTensor};

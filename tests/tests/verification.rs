@@ -13,5 +13,6 @@ mod verification {
     pub mod objectivity;
     pub mod open_core;
     pub mod small_mass;
+    pub mod terrain3d;
     pub mod three_d;
 }

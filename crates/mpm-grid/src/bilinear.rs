@@ -200,6 +200,51 @@ impl ShapeFunctions<8> for Bilinear<RegularGrid> {
     }
 }
 
+/// Trilinear shape functions on the terrain-following grid in space (eqs 19–20 over a DEM):
+/// the weights of [`Bilinear<RegularGrid>`] in the cell's fractions (a, b, c), the gradients
+/// through the cell's inverse Jacobian (`terrain3d.rs`): ∇N = (N_a/hx + N_b ∂b/∂x, N_b/r,
+/// N_c/hz + N_b ∂b/∂z).
+#[cfg(feature = "dim3")]
+impl ShapeFunctions<8> for Bilinear<crate::TerrainGrid> {
+    type Factors = crate::TerrainFactors;
+
+    #[inline(always)]
+    fn factors(&self, x: Vector) -> Result<(NodeId, crate::TerrainFactors), LocateError> {
+        self.0.locate_parts(x)
+    }
+
+    #[inline(always)]
+    fn weights(&self, f: &crate::TerrainFactors) -> [f64; 8] {
+        let (x, y, z) = ([1.0 - f.a, f.a], [1.0 - f.b, f.b], [1.0 - f.c, f.c]);
+        std::array::from_fn(|k| x[k & 1] * y[(k >> 1) & 1] * z[k >> 2])
+    }
+
+    #[inline(always)]
+    fn gradients(&self, f: &crate::TerrainFactors) -> [Vector; 8] {
+        let (x, y, z) = ([1.0 - f.a, f.a], [1.0 - f.b, f.b], [1.0 - f.c, f.c]);
+        const SLOPE: [f64; 2] = [-1.0, 1.0];
+        let [inv_hx, inv_r, inv_hz] = self.0.inverse_sizes();
+        std::array::from_fn(|k| {
+            let (p, q, r) = (k & 1, (k >> 1) & 1, k >> 2);
+            let (na, nb, nc) =
+                (SLOPE[p] * y[q] * z[r], x[p] * SLOPE[q] * z[r], x[p] * y[q] * SLOPE[r]);
+            Vector::new(na * inv_hx + nb * f.db_dx, nb * inv_r, nc * inv_hz + nb * f.db_dz)
+        })
+    }
+
+    fn node_position(&self, node: NodeId) -> Vector {
+        self.0.node_position(node)
+    }
+
+    fn min_cell_size(&self) -> f64 {
+        self.0.min_cell_size()
+    }
+
+    fn boundary_normals(&self, node: NodeId) -> BoundaryNormals {
+        self.0.boundary_normals(node)
+    }
+}
+
 /// the 1D hats' (weight, slope per cell unit) pairs along each axis at fractions (a, b, c).
 #[cfg(feature = "dim3")]
 #[inline(always)]

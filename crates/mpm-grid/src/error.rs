@@ -169,6 +169,30 @@ pub enum GridError {
         /// h / √(1 + slope²), m.
         normal_height: f64,
     },
+    /// a terrain lattice whose heights do not number (columns + 1) × (layers + 1) of the plan.
+    #[error(
+        "the terrain lattice has {count} heights; a plan of {nx} × {nz} cells needs (nx + 1)(nz + 1) = {expected}"
+    )]
+    HeightCount {
+        /// heights given.
+        count: usize,
+        /// cells along x.
+        nx: usize,
+        /// cells along z.
+        nz: usize,
+        /// heights needed.
+        expected: usize,
+    },
+    /// a terrain height that is NaN or infinite.
+    #[error("the terrain height at lattice node (i {i}, k {k}) = {value} is not finite")]
+    NonFiniteHeight {
+        /// lattice index along x.
+        i: usize,
+        /// lattice index along z.
+        k: usize,
+        /// the value.
+        value: f64,
+    },
     /// uGIMP needs a particle half-size lp with 0 < lp ≤ cell/2 along each axis.
     #[error("uGIMP particle half-size along {axis} = {value} must lie in (0, {max}] (half a cell)")]
     InvalidParticleHalfSize {

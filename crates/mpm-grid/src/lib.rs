@@ -65,6 +65,8 @@ mod stencil;
 mod tensor;
 #[cfg(not(feature = "dim3"))]
 mod terrain;
+#[cfg(feature = "dim3")]
+mod terrain3d;
 
 pub use active::{ActiveNodes, BLOCK_SIDE};
 pub use bilinear::Bilinear;
@@ -84,6 +86,8 @@ pub use stencil::{ShapeFunctions, Stencil, slot_offset, stencil_nodes, stencil_s
 pub use terrain::{
     AdjacentSegments, GroundSegment, KINK_TOLERANCE, KinkPolicy, TerrainGrid, TerrainGridSpec,
 };
+#[cfg(feature = "dim3")]
+pub use terrain3d::{TerrainFactors, TerrainGrid, TerrainGridSpec};
 
 /// most cells (or rows, or columns) along one axis: 2³⁰, so that node indices, ghost layers and
 /// i + 1 stay far from i32 overflow.

@@ -78,6 +78,10 @@ pub struct BoundaryNormals {
     /// or below the ground at a kink lies on both segments' planes, see
     /// [`TerrainGrid::boundary_normals`](crate::TerrainGrid::boundary_normals)).
     pub ground_kink: Option<Vector>,
+    /// (3D builds only) the third and fourth distinct ground planes at a node where up to four
+    /// terrain cells of different slopes meet (`TerrainGrid::ground_planes` of the 3D build).
+    #[cfg(feature = "dim3")]
+    pub ground_more: [Option<Vector>; 2],
     /// left wall (column i ≤ 0): normal +x.
     pub left_wall: Option<Vector>,
     /// right wall (column i ≥ last column): normal −x.
@@ -96,8 +100,8 @@ impl BoundaryNormals {
         self.iter().next().is_none()
     }
 
-    /// the normals present, in the order ground, ground kink, left wall, right wall (then back
-    /// and front wall in 3D).
+    /// the normals present, in the order ground, ground kink (in 3D then the other ground
+    /// planes), left wall, right wall (then back and front wall in 3D).
     pub fn iter(&self) -> impl Iterator<Item = Vector> + '_ {
         #[cfg(not(feature = "dim3"))]
         let all = [self.ground, self.ground_kink, self.left_wall, self.right_wall];
@@ -105,6 +109,8 @@ impl BoundaryNormals {
         let all = [
             self.ground,
             self.ground_kink,
+            self.ground_more[0],
+            self.ground_more[1],
             self.left_wall,
             self.right_wall,
             self.back_wall,

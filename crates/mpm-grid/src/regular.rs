@@ -227,6 +227,8 @@ impl RegularGrid {
         BoundaryNormals {
             ground: (node.j <= 0).then_some(Vector::Y),
             ground_kink: None,
+            #[cfg(feature = "dim3")]
+            ground_more: [None; 2],
             left_wall: (node.i <= 0).then_some(Vector::X),
             right_wall: (i64::from(node.i) >= self.cells[0] as i64).then_some(Vector::NEG_X),
             #[cfg(feature = "dim3")]

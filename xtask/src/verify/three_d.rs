@@ -192,6 +192,89 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
     triaxial(rows);
     plane_strain(rows);
     oblique_walls(rows);
+    terrain(rows);
+}
+
+/// The terrain-following grid over a DEM (`mpm_tests::terrain3d`): eq 22 on a DEM of an
+/// oblique plane, a flat DEM against the regular grid, no particle below a DEM of many slopes.
+fn terrain(rows: &mut Rows) {
+    use mpm_tests::terrain3d::{dem_slope, flat_dem, no_penetration};
+    let case = format!(
+        "3D DEM of a {SLOPE_DEG}° plane, fall line {AZIMUTH_DEG}° from x to z, vertical gravity \
+         (USAVG FLIP trilinear, 0.25 m)"
+    );
+    match dem_slope(0.25) {
+        Ok(r) => {
+            for &(t, [along, across], [rigid, _]) in &r.samples {
+                rows.rel(
+                    &case,
+                    &format!("travel along the fall line at {t} s"),
+                    rigid,
+                    "eq 22",
+                    along,
+                    PATH_REL,
+                );
+                rows.at_most(
+                    (&case, &format!("|travel across| / travel at {t} s")),
+                    "0",
+                    "eq 22 (no drift)",
+                    across.abs() / rigid,
+                    DRIFT_REL,
+                    true,
+                );
+            }
+            rows.at_least(
+                (&case, "lowest particle centre above the DEM (m)"),
+                "> 0",
+                "no penetration",
+                r.lowest,
+                0.0,
+            );
+        }
+        Err(e) => rows.failed(&case, "run", &e),
+    }
+    let case = "3D flat DEM against the regular grid (block thrown on a rough floor, 0.5 s)";
+    match flat_dem() {
+        Ok(r) => {
+            rows.at_most(
+                (case, "max |x_terrain − x_regular| (m)"),
+                "0",
+                "the same grid",
+                r.position,
+                ROUND_OFF,
+                false,
+            );
+            rows.at_most(
+                (case, "max |v_terrain − v_regular| (m/s)"),
+                "0",
+                "the same grid",
+                r.velocity,
+                ROUND_OFF,
+                false,
+            );
+        }
+        Err(e) => rows.failed(case, "run", &e),
+    }
+    let case = "3D sand over a DEM of planar cells of many slopes (MUSL FLIP trilinear, 1.5 s)";
+    match no_penetration() {
+        Ok(r) => {
+            rows.info(
+                case,
+                "ground planes, slopes",
+                "–",
+                "the DEM",
+                format!("{} planes, {:.0}° to {:.0}°", r.planes, r.slopes_deg[1], r.slopes_deg[0]),
+            );
+            rows.at_least(
+                (case, "lowest particle centre above the DEM at any step (m)"),
+                "≥ 0 (to round-off)",
+                "no penetration",
+                r.lowest,
+                -ROUND_OFF,
+            );
+        }
+        Err(e) => rows.failed(case, "run", &e),
+    }
 }
 
 /// A block thrown into a wall plane oblique to every grid axis, frictionless and rough

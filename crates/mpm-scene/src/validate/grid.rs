@@ -266,5 +266,13 @@ pub(super) fn grid_error(ctx: &Ctx<'_>, e: GridError, profile: &[[f64; 2]]) -> S
             "particles per cell ≥ 1",
             "check particles_per_cell",
         ),
+        // (a terrain lattice of heights is the 3D grid's: `validate/space.rs`)
+        GridError::HeightCount { .. } | GridError::NonFiniteHeight { .. } => ctx.err(
+            "grid.dem",
+            None,
+            e.to_string(),
+            "a finite height at every lattice node",
+            "check the DEM",
+        ),
     }
 }

@@ -194,6 +194,10 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
         for (law, normal) in [
             (sides.ground, normals.ground),
             (sides.ground, normals.ground_kink),
+            #[cfg(feature = "dim3")]
+            (sides.ground, normals.ground_more[0]),
+            #[cfg(feature = "dim3")]
+            (sides.ground, normals.ground_more[1]),
             (sides.left_wall, normals.left_wall),
             (sides.right_wall, normals.right_wall),
             #[cfg(feature = "dim3")]
