@@ -35,8 +35,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// only ε̄ᵖ per particle; 6: the dissipation carries the boundary impulse; 7: the history
 /// carries the hazard envelopes; 8: the dissipation and the energy rows carry the transfer
 /// dissipation, the solver settings the PIC share and the separation density; 9: the history
-/// carries a 3D run's hazard maps).
-pub const FORMAT: u32 = 9;
+/// carries a 3D run's hazard maps; 10: the hazard maps no longer carry a floor height, the
+/// grid's ground gives it).
+pub const FORMAT: u32 = 10;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

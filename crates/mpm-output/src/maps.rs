@@ -75,14 +75,13 @@ fn fail(path: &Path, e: mpm_dem::DemError) -> OutputError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mpm_solver3d::Vector;
 
     /// The maps read back (ESRI ASCII and GeoTIFF, through `mpm-dem`'s readers) are the plan's
     /// values at the right map places: cell (col, row) of the plan is the raster cell whose
     /// centre is at map (x0 + (col + ½) w, −(z0 + (row + ½) w)).
     #[test]
     fn maps_read_back_hold_the_plan_at_its_map_places() {
-        let mut plan = PlanEnvelope::new(Vector::new(10.0, 0.0, 20.0), 0.5, [4, 3]);
+        let mut plan = PlanEnvelope::new([10.0, 20.0], 0.5, [4, 3]);
         for (k, c) in plan.cells.iter_mut().enumerate() {
             c.max_height = k as f64;
             c.arrival = (k % 2 == 0).then_some(0.1 * k as f64);

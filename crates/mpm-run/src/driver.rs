@@ -621,7 +621,7 @@ impl<'a> Driver<'a> {
             &p.position,
             &p.mass,
             r.config.gravity.length(),
-            |x| ground_height(&r.ground, x),
+            |x| ground_height(&r.ground, x.x),
         ));
         self.record_series(solver);
         self.write_frame(solver)?;

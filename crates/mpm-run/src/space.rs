@@ -30,8 +30,8 @@ use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
     self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
-use mpm_scene::{SavedState, SpaceScene, dispatch_space, fnv1a};
-use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport};
+use mpm_scene::{SavedState, SpaceGrid, SpaceScene, dispatch_space, fnv1a};
+use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport, Vector};
 
 use crate::driver::slot;
 use crate::error::RunError;
@@ -130,8 +130,9 @@ pub(crate) fn resume_space(
     let path = dir.join(checkpoint::FILE_NAME);
     let refuse =
         |reason: String| RunError::Output(OutputError::Checkpoint { path: path.clone(), reason });
-    // (a 3D scene names no other file)
-    let scene = mpm_scene::load_space_str(&c.scene_text, &c.origin)?;
+    // (a terrain grid's DEM is relative to the scene file's directory, as when it started)
+    let scene_dir = Path::new(&c.origin).parent().unwrap_or(Path::new(""));
+    let scene = mpm_scene::load_space_str_in(&c.scene_text, &c.origin, scene_dir)?;
     if c.state.dimension() != 3 {
         return Err(refuse("its scene is a 3D scene but its state is a 2D run's".into()));
     }
@@ -279,37 +280,49 @@ impl<'a> SpaceDriver<'a> {
     ) -> Self {
         let g = &scene.grid;
         let d = scene.runout_direction;
-        let (lo, hi) = (g.origin(), g.upper_corner());
-        let corners = [lo.x, hi.x]
-            .into_iter()
-            .flat_map(|x| [lo.z, hi.z].map(|z| mpm_solver3d::Vector::new(x, 0.0, z).dot(d)));
+        let ([x0, z0], [x1, z1]) = (g.plan_origin(), g.plan_end());
+        let corners =
+            [x0, x1].into_iter().flat_map(|x| [z0, z1].map(|z| Vector::new(x, 0.0, z).dot(d)));
         let (s0, s1) =
             corners.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| (a.min(s), b.max(s)));
         let p = solver.particles();
-        let y0 = lo.y;
         let check = EnergyCheck::new(
             &solver.energy(),
             &p.position,
             &p.mass,
             scene.config.gravity.length(),
-            |_| y0,
+            |x| g.ground(x.x, x.z).0,
         );
         let mass: f64 = p.mass.iter().sum();
         // (from the generation positions: a resumed run's particles have moved)
-        let com0 = p
-            .initial_position
-            .iter()
-            .zip(&p.mass)
-            .map(|(x, m)| *x * *m)
-            .sum::<mpm_solver3d::Vector>()
-            / mass;
+        let com0 =
+            p.initial_position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<Vector>() / mass;
+        let spacing = g.plan_cell() / scene.gimp_ppc as f64;
         let plan = scene.output.hazard_maps.then(|| {
             let [nx, _, nz] = g.cells();
-            let mut e = PlanEnvelope::new(lo, g.cell_size().x, [nx, nz]);
-            let spacing = g.cell_size().x / scene.gimp_ppc as f64;
+            let mut e = PlanEnvelope::new(g.plan_origin(), g.plan_cell(), [nx, nz]);
             observe(&mut e, scene, spacing, solver);
             e
         });
+        // the ground in the runout plane: under the line through the initial centre of mass
+        // along the runout direction, at the plan cells' spacing (the floor of a regular grid)
+        let ground = match g {
+            SpaceGrid::Regular(r) => {
+                let y0 = r.origin().y;
+                vec![DVec2::new(s0, y0), DVec2::new(s1, y0)]
+            }
+            SpaceGrid::Terrain(_) => {
+                let along = com0.dot(d);
+                let n = ((s1 - s0) / g.plan_cell()).ceil().max(1.0) as usize;
+                (0..=n)
+                    .map(|k| {
+                        let s = s0 + (s1 - s0) * k as f64 / n as f64;
+                        let x = com0 + (s - along) * d;
+                        DVec2::new(s, g.ground(x.x, x.z).0)
+                    })
+                    .collect()
+            }
+        };
         let mut d = SpaceDriver {
             scene,
             plan,
@@ -322,8 +335,8 @@ impl<'a> SpaceDriver<'a> {
             stop_after: opts.stop_after,
             io_error: None,
             stop: None,
-            ground: vec![DVec2::new(s0, y0), DVec2::new(s1, y0)],
-            spacing: g.cell_size().x / scene.gimp_ppc as f64,
+            ground,
+            spacing,
             com0,
             energy: Vec::new(),
             runout: Vec::new(),
@@ -465,7 +478,7 @@ impl<'a> SpaceDriver<'a> {
             &mass,
             &self.ground,
             self.spacing,
-            self.scene.grid.cell_size().x,
+            self.scene.grid.plan_cell(),
             self.runout.first(),
         );
         let total: f64 = mass.iter().sum();
@@ -640,7 +653,7 @@ impl<'a> SpaceDriver<'a> {
         let deposit = self.plan.as_ref().map(|e| {
             let flow: Vec<mpm_solver3d::Vector> =
                 flowing(scene, p).map(|q| p.position[q]).collect();
-            e.deposit(self.spacing, &flow)
+            e.deposit(self.spacing, &flow, |x, z| scene.grid.ground(x, z))
         });
         if let (Some(e), Some(depth)) = (&self.plan, &deposit) {
             summary.hazard_maps = Some(e.indicators(depth));
@@ -741,7 +754,8 @@ fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
 ) {
     let p = solver.particles();
     if scene.materials.flow_mask().is_none() {
-        e.observe(solver.time(), spacing, [&p.position, &p.velocity], [&p.mass, &p.volume]);
+        let ground = |x, z| scene.grid.ground(x, z);
+        e.observe(solver.time(), spacing, [&p.position, &p.velocity], [&p.mass, &p.volume], ground);
         return;
     }
     let keep: Vec<usize> = flowing(scene, p).collect();
@@ -754,5 +768,6 @@ fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         spacing,
         [&pick(&p.position), &pick(&p.velocity)],
         [&pick_f(&p.mass), &pick_f(&p.volume)],
+        |x, z| scene.grid.ground(x, z),
     );
 }

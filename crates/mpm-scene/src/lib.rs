@@ -59,13 +59,13 @@ pub use scene::{
     ResolvedOutput, Scene, SectionLine, Seed, StopAtRest, Warning, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
-pub use space::{SpaceScene, declared_dimension, dispatch_space};
+pub use space::{SpaceGrid, SpaceScene, declared_dimension, dispatch_space};
 pub use summary::{
     DtStats, EnergyReport, InitialStateSummary, RunStatus, RunSummary, RunoutIndicators,
     RunoutMetrics, RunoutReport,
 };
 pub use validate::plausible::WARNINGS;
-pub use validate::{load_scene_str, load_scene_str_in, load_space_str};
+pub use validate::{load_scene_str, load_scene_str_in, load_space_str, load_space_str_in};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
 /// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are
@@ -172,10 +172,10 @@ impl AnyScene {
 pub fn load_any_scene_file(path: &std::path::Path) -> Result<AnyScene, SceneError> {
     let text = read_scene_text(path)?;
     let origin = path.display().to_string();
-    if declared_dimension(&text) == 3 {
-        return Ok(AnyScene::Space(Box::new(load_space_str(&text, &origin)?)));
-    }
     let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    if declared_dimension(&text) == 3 {
+        return Ok(AnyScene::Space(Box::new(load_space_str_in(&text, &origin, dir)?)));
+    }
     Ok(AnyScene::Plane(Box::new(load_scene_str_in(&text, &origin, dir)?)))
 }
 

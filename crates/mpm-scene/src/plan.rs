@@ -4,11 +4,11 @@
 //! hazard map is drawn from (FLO-2D's maximum depth, velocity, impact pressure and arrival
 //! time; RAMMS and r.avaflow the same kinds of map).
 //!
-//! The ground is the grid's floor y = y₀ (a regular grid; a terrain-following one measures
-//! normal to its terrain). Per plan cell and observation, over the particles whose (x, z) fall
-//! in it:
-//! - flow height `h = max_p (y_p + s/2) − y₀`, the highest particle top (centre plus half the
-//!   particle spacing s) above the floor;
+//! The ground is the grid's: the floor y = y₀ of a regular grid, the DEM's surface g(x, z) of
+//! a terrain grid. Per plan cell and observation, over the particles whose (x, z) fall in it:
+//! - flow height `h = max_p (y_p − g(x_p, z_p)) cos θ(x_p, z_p) + s/2`, the highest particle
+//!   top (centre plus half the particle spacing s) above the ground, measured normal to it
+//!   (θ the ground's slope there; on a flat floor, plainly the height above it);
 //! - depth-averaged speed `ū = |Σ m v| / Σ m`; particle speed `max |v|`;
 //! - impact pressure `ρ̄ ū²` with the column's bulk density `ρ̄ = Σ m / Σ V`; momentum `h ū`
 //!   (m²/s, the flux per unit width);
@@ -46,8 +46,6 @@ pub struct PlanEnvelope {
     pub x0: f64,
     /// z of the first row's edge (m).
     pub z0: f64,
-    /// the floor's height y₀ (m).
-    pub floor: f64,
     /// cell side (m).
     pub cell: f64,
     /// cells along x.
@@ -90,13 +88,11 @@ impl Default for Sums {
 }
 
 impl PlanEnvelope {
-    /// The plan cells of a regular grid from (`x0`, `floor`, `z0`) with `cols × rows` cells of
-    /// side `cell` in plan.
-    pub fn new(origin: Vector, cell: f64, [cols, rows]: [usize; 2]) -> Self {
+    /// The plan cells from (`x0`, `z0`) with `cols × rows` cells of side `cell`.
+    pub fn new([x0, z0]: [f64; 2], cell: f64, [cols, rows]: [usize; 2]) -> Self {
         Self {
-            x0: origin.x,
-            z0: origin.z,
-            floor: origin.y,
+            x0,
+            z0,
             cell,
             cols,
             rows,
@@ -115,7 +111,8 @@ impl PlanEnvelope {
     }
 
     /// Takes the particles' state at `time` into the maxima. `spacing` is the particle spacing
-    /// (a particle's top is half of it above its centre). Costs the particles and the cells
+    /// (a particle's top is half of it above its centre); `ground(x, z)` the ground's height
+    /// under a plan point and the cosine of its slope there. Costs the particles and the cells
     /// they are in, not the plan's area.
     pub fn observe(
         &mut self,
@@ -123,6 +120,7 @@ impl PlanEnvelope {
         spacing: f64,
         [position, velocity]: [&[Vector]; 2],
         [mass, volume]: [&[f64]; 2],
+        ground: impl Fn(f64, f64) -> (f64, f64),
     ) {
         if self.scratch.len() != self.cells.len() {
             self.scratch = vec![Sums::default(); self.cells.len()];
@@ -138,7 +136,8 @@ impl PlanEnvelope {
             if s.count == 0 {
                 self.touched.push(c as u32);
             }
-            s.top = s.top.max(x.y + 0.5 * spacing - self.floor);
+            let (g, cos) = ground(x.x, x.z);
+            s.top = s.top.max((x.y - g) * cos + 0.5 * spacing);
             s.mass += mass[q];
             s.volume += volume[q];
             s.momentum += mass[q] * v;
@@ -160,13 +159,20 @@ impl PlanEnvelope {
         }
     }
 
-    /// The deposit's depth per cell (the highest particle top above the floor, 0 where empty)
-    /// from the particles' final positions, row by row as [`PlanEnvelope::cells`].
-    pub fn deposit(&self, spacing: f64, positions: &[Vector]) -> Vec<f64> {
+    /// The deposit's depth per cell (the highest particle top above the ground, measured
+    /// normal to it as the flow height; 0 where empty) from the particles' final positions, row
+    /// by row as [`PlanEnvelope::cells`].
+    pub fn deposit(
+        &self,
+        spacing: f64,
+        positions: &[Vector],
+        ground: impl Fn(f64, f64) -> (f64, f64),
+    ) -> Vec<f64> {
         let mut depth = vec![0.0f64; self.cells.len()];
         for p in positions.iter().filter(|p| p.is_finite()) {
             if let Some(c) = self.index(p.x, p.z) {
-                depth[c] = depth[c].max(p.y + 0.5 * spacing - self.floor);
+                let (g, cos) = ground(p.x, p.z);
+                depth[c] = depth[c].max((p.y - g) * cos + 0.5 * spacing);
             }
         }
         depth
@@ -217,7 +223,7 @@ mod tests {
     #[test]
     fn a_rigidly_sliding_block_gives_the_exact_maxima() {
         let (w, s, v) = (0.1, 0.05, Vector::new(2.0, 0.0, 0.0));
-        let mut e = PlanEnvelope::new(Vector::ZERO, w, [60, 20]);
+        let mut e = PlanEnvelope::new([0.0, 0.0], w, [60, 20]);
         let mut start = Vec::new();
         for i in 0..20 {
             for j in 0..6 {
@@ -234,7 +240,7 @@ mod tests {
         for step in 0..=2000 {
             let t = step as f64 * dt;
             let pos: Vec<Vector> = start.iter().map(|p| *p + t * v).collect();
-            e.observe(t, s, [&pos, &vel], [&mass, &volume]);
+            e.observe(t, s, [&pos, &vel], [&mass, &volume], |_, _| (0.0, 1.0));
         }
         for row in 0..20 {
             for col in 0..50 {
@@ -259,12 +265,53 @@ mod tests {
             }
         }
         let end: Vec<Vector> = start.iter().map(|p| *p + 2.0 * v).collect();
-        let depth = e.deposit(s, &end);
+        let depth = e.deposit(s, &end, |_, _| (0.0, 1.0));
         let ind = e.indicators(&depth);
         // the block's footprint 1 m × 0.5 m, 0.3 m deep
         assert!((ind.deposit_area - 0.5).abs() < 1e-9 && (ind.deposit_volume - 0.15).abs() < 1e-9);
         assert!((ind.max_deposit_depth - 0.3).abs() < 1e-12);
         // swept: x from 0 to 5 m (the block's back end reaches 4 m) over 0.5 m
         assert!((ind.affected_area - 2.5).abs() < 1e-9, "{ind:?}");
+    }
+
+    /// The same block sliding rigidly down a 30° plane (its base on the plane): the flow
+    /// height, measured normal to the ground, is the block's 0.3 m in every cell it passes
+    /// (the vertical height above the ground would be 0.3 / cos 30° = 0.346 m).
+    #[test]
+    fn the_flow_height_over_a_slope_is_measured_normal_to_it() {
+        let (w, s) = (0.1, 0.05);
+        let theta = 30f64.to_radians();
+        let down = Vector::new(theta.cos(), -theta.sin(), 0.0);
+        let normal = Vector::new(theta.sin(), theta.cos(), 0.0);
+        let ground = |x: f64, _z: f64| (-theta.tan() * x, theta.cos());
+        let mut e = PlanEnvelope::new([0.0, 0.0], w, [60, 20]);
+        let mut start = Vec::new();
+        for i in 0..20 {
+            for j in 0..6 {
+                for k in 0..10 {
+                    let c = |n: usize| (n as f64 + 0.5) * s;
+                    start.push(c(i) * down + c(j) * normal + Vector::new(0.0, 0.0, 0.5 + c(k)));
+                }
+            }
+        }
+        let mass = vec![1500.0 * s * s * s; start.len()];
+        let volume = vec![s * s * s; start.len()];
+        let vel = vec![2.0 * down; start.len()];
+        for step in 0..=200 {
+            let t = step as f64 * 1e-2;
+            let pos: Vec<Vector> = start.iter().map(|p| *p + t * 2.0 * down).collect();
+            e.observe(t, s, [&pos, &vel], [&mass, &volume], ground);
+        }
+        // (the columns the whole block's section crossed: x from 1.2 m, past its start, to
+        // 3.4 m, before its back end stops at 4 cos 30° = 3.46 m)
+        let mut seen = 0;
+        for (k, c) in e.cells.iter().enumerate().filter(|(_, c)| c.arrival.is_some()) {
+            if (12..34).contains(&(k % 60)) {
+                assert!((c.max_height - 0.3).abs() < 1e-9, "cell {k}: {c:?}");
+                assert!((c.max_mean_speed - 2.0).abs() < 1e-9, "{c:?}");
+                seen += 1;
+            }
+        }
+        assert_eq!(seen, 22 * 5);
     }
 }

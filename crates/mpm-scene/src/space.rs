@@ -1,9 +1,12 @@
 //! A validated 3D scene ([`SpaceScene`], from a file with `[grid] dimension = 3`) and the one
 //! place where its run-time choices become types ([`dispatch_space`]): the model of the
-//! materials × the shape functions on the regular 3D grid (`mpm-grid3d`), for the 3D build of
-//! the solver (`mpm-solver3d`).
+//! materials × the shape functions on the regular 3D grid, or trilinear on the terrain grid
+//! over a DEM (`mpm-grid3d`), for the 3D build of the solver (`mpm-solver3d`).
 
-use mpm_grid3d::{RegularGrid, RegularShape, ShapeFunctions, ShapeJob, with_regular_shape};
+use mpm_grid3d::{
+    Bilinear, LocateError, RegularGrid, RegularShape, ShapeFunctions, ShapeJob, TerrainGrid,
+    with_regular_shape,
+};
 use mpm_solver3d::{NewParticle, Particles, SolverConfig, Stress, Vector};
 
 use crate::error::SceneError;
@@ -14,11 +17,13 @@ use crate::scene::{EnergyAlarm, MaterialsBuilt, StopAtRest, Warning};
 /// A validated 3D scene, ready to run.
 #[derive(Clone, Debug)]
 pub struct SpaceScene {
+    /// the directory the scene's named files (a terrain grid's DEM) are relative to.
+    pub(crate) dir: Option<std::path::PathBuf>,
     pub(crate) origin: String,
     pub(crate) text: String,
     pub(crate) file: SpaceFile,
     /// the grid.
-    pub grid: RegularGrid,
+    pub grid: SpaceGrid,
     /// the shape functions.
     pub shape_function: ShapeFunctionKind,
     /// particles per cell along each axis that uGIMP's particle size follows (the largest of
@@ -49,6 +54,78 @@ pub struct SpaceScene {
     pub runout_direction: Vector,
     /// the plausibility warnings, less the silenced ones.
     pub warnings: Vec<Warning>,
+}
+
+/// The grid of a 3D scene: regular, or terrain-following over a DEM.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpaceGrid {
+    /// the regular grid of cubes.
+    Regular(RegularGrid),
+    /// the terrain-following grid over a DEM (trilinear shape functions only).
+    Terrain(TerrainGrid),
+}
+
+impl SpaceGrid {
+    /// the cell containing `p`, or why there is none.
+    pub fn locate(&self, p: Vector) -> Result<(), LocateError> {
+        match self {
+            SpaceGrid::Regular(g) => g.locate(p).map(|_| ()),
+            SpaceGrid::Terrain(g) => g.locate(p).map(|_| ()),
+        }
+    }
+
+    /// the smallest cell dimension the time step follows (m).
+    pub fn min_cell_size(&self) -> f64 {
+        match self {
+            SpaceGrid::Regular(g) => g.min_cell_size(),
+            SpaceGrid::Terrain(g) => g.min_cell_size(),
+        }
+    }
+
+    /// the side of a cell in plan (m): particles are spaced by it over their particles per
+    /// cell, and the hazard maps' cells are it.
+    pub fn plan_cell(&self) -> f64 {
+        match self {
+            SpaceGrid::Regular(g) => g.cell_size().x,
+            SpaceGrid::Terrain(g) => g.spacing()[0],
+        }
+    }
+
+    /// cells along x, y (a terrain grid's layers) and z.
+    pub fn cells(&self) -> [usize; 3] {
+        match self {
+            SpaceGrid::Regular(g) => g.cells(),
+            SpaceGrid::Terrain(g) => {
+                let [nx, nz] = g.plan_cells();
+                [nx, g.layers().1, nz]
+            }
+        }
+    }
+
+    /// the plan's lowest corner (x₀, z₀) (m).
+    pub fn plan_origin(&self) -> [f64; 2] {
+        match self {
+            SpaceGrid::Regular(g) => [g.origin().x, g.origin().z],
+            SpaceGrid::Terrain(g) => g.plan_origin(),
+        }
+    }
+
+    /// the plan's highest corner (x₁, z₁) (m).
+    pub fn plan_end(&self) -> [f64; 2] {
+        let [x0, z0] = self.plan_origin();
+        let [nx, _, nz] = self.cells();
+        let h = self.plan_cell();
+        [x0 + nx as f64 * h, z0 + nz as f64 * h]
+    }
+
+    /// the ground's height under plan point (x, z) and the vertical component of its upward
+    /// unit normal (the cosine of its slope): the floor y₀ and 1 on a regular grid.
+    pub fn ground(&self, x: f64, z: f64) -> (f64, f64) {
+        match self {
+            SpaceGrid::Regular(g) => (g.origin().y, 1.0),
+            SpaceGrid::Terrain(g) => (g.ground_height(x, z), g.ground_normal(x, z).y),
+        }
+    }
 }
 
 /// What a 3D run writes.
@@ -156,8 +233,15 @@ pub fn dispatch_space<J: SpaceJob>(scene: &SpaceScene, job: J) -> Result<J::Outp
                 ShapeFunctionKind::Gimp => RegularShape::Gimp,
                 ShapeFunctionKind::Bspline => RegularShape::BSpline,
             };
+            let grid = match &scene.grid {
+                SpaceGrid::Regular(g) => *g,
+                // (validation refused other shape functions on a terrain grid)
+                SpaceGrid::Terrain(t) => {
+                    return Ok(self.job.run(scene, Bilinear(t.clone()), materials));
+                }
+            };
             let job = WithModel { job: self.job, scene, materials };
-            with_regular_shape(kind, scene.grid, scene.gimp_ppc, job).map_err(|e| SceneError {
+            with_regular_shape(kind, grid, scene.gimp_ppc, job).map_err(|e| SceneError {
                 origin: scene.origin.clone(),
                 line: None,
                 column: None,

@@ -108,17 +108,17 @@ pub struct EnergyCheck {
 
 impl EnergyCheck {
     /// starts from the initial ledger of particles at `position` with masses `mass`, under
-    /// gravity of magnitude `g`, above the ground of height `ground(x)` (h_p = the particle's
-    /// height above it, 0 below it).
+    /// gravity of magnitude `g`, above the ground of height `ground(x)` under each particle
+    /// position x (h_p = the particle's height above it, 0 below it).
     pub fn new(
         initial: &EnergyLedger,
         position: &[Vector],
         mass: &[Real],
         g: Real,
-        ground: impl Fn(Real) -> Real,
+        ground: impl Fn(Vector) -> Real,
     ) -> Self {
         let height_energy: Real =
-            position.iter().zip(mass).map(|(x, m)| m * g * (x.y - ground(x.x)).max(0.0)).sum();
+            position.iter().zip(mass).map(|(x, m)| m * g * (x.y - ground(*x)).max(0.0)).sum();
         Self {
             initial_scale: initial.kinetic + initial.strain + height_energy,
             initial_potential: initial.potential,
@@ -165,7 +165,7 @@ mod tests {
         // A body of m g h = 100 J/m above the ground, at rest: 1 kg at 10 m under g = 10 m/s²
         // (ground at y = 2), and a particle below the ground, which adds nothing.
         let position = [Vector::new(3.0, 12.0), Vector::new(0.0, -1.0)];
-        let ground = |_x: Real| 2.0;
+        let ground = |_x: Vector| 2.0;
         let mut c =
             EnergyCheck::new(&ledger(0.0, 500.0, 0.0), &position, &[1.0, 5.0], 10.0, ground);
         assert_eq!(c.observe(0.0, &ledger(0.0, 500.0, 0.0)), 0.0);

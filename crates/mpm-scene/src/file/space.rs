@@ -3,9 +3,9 @@
 //! materials, `[solver]` and `[output]` tables are the 2D ones (`gravity` has three
 //! components).
 //!
-//! Axes: x, y up (gravity along −y by default), z. The grid's faces: `ground` (y = y₀),
-//! `left_wall` and `right_wall` (x = x₀, x₁), `back_wall` and `front_wall` (z = z₀, z₁); the top
-//! is open.
+//! Axes: x, y up (gravity along −y by default), z. The grid's faces: `ground` (y = y₀, or the
+//! DEM's surface on a terrain grid), `left_wall` and `right_wall` (x = x₀, x₁), `back_wall` and
+//! `front_wall` (z = z₀, z₁); the top is open.
 
 use std::collections::BTreeMap;
 
@@ -39,23 +39,45 @@ pub struct SpaceFile {
     pub silence: Vec<String>,
 }
 
-/// `[grid]` of a 3D scene.
+/// `[grid]` of a 3D scene: a regular grid (`origin`, `cell`, `cells`) or the terrain-following
+/// grid over a DEM (`dem`, `from`, `to`, `plan_cell`, `layer_height`, `layers`).
+///
+/// On a terrain grid, model coordinates are map coordinates: x = map x (east), y = height,
+/// z = −map y (north is −z, as in the hazard maps).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpaceGridSpec {
     /// 3.
     pub dimension: i64,
-    /// `"regular"` (the terrain-following grid is 2D only).
+    /// `"regular"` or `"terrain"`.
     pub kind: GridKind,
-    /// the lowest node `[x, y, z]` (m).
-    #[serde(deserialize_with = "exact::required_triple")]
-    pub origin: [f64; 3],
-    /// cell size `[dx, dy, dz]` (m).
-    #[serde(deserialize_with = "exact::required_triple")]
-    pub cell: [f64; 3],
-    /// number of cells `[nx, ny, nz]`.
-    #[serde(deserialize_with = "exact::required_triple")]
-    pub cells: [i64; 3],
+    /// regular: the lowest node `[x, y, z]` (m).
+    #[serde(default, deserialize_with = "exact::triple", skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// regular: cell size `[dx, dy, dz]` (m).
+    #[serde(default, deserialize_with = "exact::triple", skip_serializing_if = "Option::is_none")]
+    pub cell: Option<[f64; 3]>,
+    /// regular: number of cells `[nx, ny, nz]`.
+    #[serde(default, deserialize_with = "exact::triple", skip_serializing_if = "Option::is_none")]
+    pub cells: Option<[i64; 3]>,
+    /// terrain: the DEM (ESRI ASCII `.asc` or GeoTIFF `.tif`), relative to the scene file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dem: Option<String>,
+    /// terrain: the plan's south-west corner, map coordinates `[x, y]` (m).
+    #[serde(default, deserialize_with = "exact::pair", skip_serializing_if = "Option::is_none")]
+    pub from: Option<[f64; 2]>,
+    /// terrain: the plan's north-east corner, map coordinates `[x, y]` (m).
+    #[serde(default, deserialize_with = "exact::pair", skip_serializing_if = "Option::is_none")]
+    pub to: Option<[f64; 2]>,
+    /// terrain: the plan cells' side (m); `to − from` is a whole number of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan_cell: Option<f64>,
+    /// terrain: the node layers' spacing, measured vertically (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer_height: Option<f64>,
+    /// terrain: cell layers above the ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layers: Option<i64>,
 }
 
 /// Shape of a 3D body.

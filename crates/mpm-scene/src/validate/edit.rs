@@ -4,7 +4,8 @@
 
 use toml_edit::{DocumentMut, Item, Value};
 
-use super::{load, load_space_str};
+use super::load;
+use super::space::load_space;
 use crate::error::SceneError;
 use crate::scene::Scene;
 use crate::space::SpaceScene;
@@ -73,7 +74,7 @@ impl SpaceScene {
     pub fn with_value(&self, path: &str, value: &str) -> Result<SpaceScene, SceneError> {
         let text = edited(&self.text, &self.origin, path, value)?;
         let origin = format!("{} (with {path} = {value})", self.origin);
-        load_space_str(&text, &origin).map(|mut scene| {
+        load_space(&text, &origin, self.dir.as_deref()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })

@@ -20,9 +20,9 @@ mod output;
 pub mod plausible;
 mod polyline;
 mod solver;
-mod space;
+pub(super) mod space;
 
-pub use space::load_space_str;
+pub use space::{load_space_str, load_space_str_in};
 
 use crate::error::SceneError;
 use crate::file::*;

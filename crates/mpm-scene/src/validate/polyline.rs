@@ -169,7 +169,7 @@ fn from_file(
 }
 
 /// A raster error at `field`, with the fix its kind calls for.
-fn dem_error(ctx: &Ctx<'_>, field: &str, e: DemError) -> SceneError {
+pub(super) fn dem_error(ctx: &Ctx<'_>, field: &str, e: DemError) -> SceneError {
     let fix = match &e {
         DemError::Io { .. } => "check the path (relative to the scene file's directory)",
         DemError::UnknownFormat { .. } => "give an ESRI ASCII grid (.asc) or a GeoTIFF (.tif)",

@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 use mpm_contact3d::{Friction, Wall};
-use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid};
+use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid, TerrainGrid, TerrainGridSpec};
 use mpm_solver3d::generate::{self, Shape};
 // the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
 // build's), converted below
@@ -23,16 +23,35 @@ use crate::file::{
 use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
 use crate::materials::MaterialsBuilt;
 use crate::source::SourceMap;
-use crate::space::{SpaceOutput, SpaceScene, SpaceSeed};
+use crate::space::{SpaceGrid, SpaceOutput, SpaceScene, SpaceSeed};
 
 fn triple(p: [f64; 3]) -> String {
     format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
 }
 
-/// Parses and validates a 3D scene; `origin` names the text in messages.
+/// Parses and validates a 3D scene; `origin` names the text in messages, and the files it
+/// names (a terrain grid's DEM) are relative to the working directory.
 pub fn load_space_str(text: &str, origin: &str) -> Result<SpaceScene, SceneError> {
+    load_space(text, origin, None)
+}
+
+/// [`load_space_str`] for a scene whose named files are relative to `dir` (the directory of
+/// the scene file).
+pub fn load_space_str_in(
+    text: &str,
+    origin: &str,
+    dir: &std::path::Path,
+) -> Result<SpaceScene, SceneError> {
+    load_space(text, origin, Some(dir))
+}
+
+pub(super) fn load_space(
+    text: &str,
+    origin: &str,
+    dir: Option<&std::path::Path>,
+) -> Result<SpaceScene, SceneError> {
     let map = SourceMap::new(text);
-    let ctx = Ctx { origin, map: &map, dir: None };
+    let ctx = Ctx { origin, map: &map, dir };
     let file: SpaceFile = toml::from_str(text).map_err(|e| {
         if e.message().contains("unknown field `initial_state`") {
             ctx.err(
@@ -47,7 +66,9 @@ pub fn load_space_str(text: &str, origin: &str) -> Result<SpaceScene, SceneError
             serde_error(&ctx, &e)
         }
     })?;
-    resolve(&ctx, file, text)
+    let mut scene = resolve(&ctx, file, text)?;
+    scene.dir = dir.map(std::path::Path::to_path_buf);
+    Ok(scene)
 }
 
 fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneError> {
@@ -60,6 +81,15 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
         .shape_function
         .or(settings.preset.map(|p| p.shape_function))
         .unwrap_or(ShapeFunctionKind::Bilinear);
+    if matches!(grid, SpaceGrid::Terrain(_)) && shape_function != ShapeFunctionKind::Bilinear {
+        return Err(ctx.err(
+            "solver.shape_function",
+            Some(format!("\"{}\"", shape_function.name())),
+            "the terrain grid offers trilinear shape functions only",
+            "\"bilinear\" (trilinear in 3D) on `[grid] kind = \"terrain\"`",
+            "use `shape_function = \"bilinear\"`, or a regular grid for uGIMP and B-splines",
+        ));
+    }
     let built = materials::build(ctx, &f.materials)?;
     if f.bodies.is_empty() || f.bodies.len() > MAX_BODIES {
         return Err(ctx.err(
@@ -73,7 +103,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let names: Vec<&str> = f.bodies.iter().map(|b| b.material.as_str()).collect();
     let (materials, used) = materials::select(ctx, &f.materials, &names, &built)?;
     let (seeds, gimp_ppc) = seeds(ctx, &f, &grid, &used)?;
-    let config = config(ctx, &f, &settings, gravity, &materials)?;
+    let config = config(ctx, &f, &grid, &settings, gravity, &materials)?;
     for (k, w) in config.walls.iter().enumerate() {
         if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
             return Err(ctx.err(
@@ -90,10 +120,11 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
         }
     }
     let initial_dt = first_dt(ctx, &f, &config, &grid, &materials, &seeds, settings.max_steps)?;
-    let output = output(ctx, &f)?;
+    let output = output(ctx, &f, &grid)?;
     let warnings = plausible::space_warnings(ctx, &f, gravity.length())?;
     let runout_direction = runout_direction(ctx, &f, gravity)?;
     Ok(SpaceScene {
+        dir: None,
         origin: ctx.origin.to_string(),
         text: text.to_string(),
         grid,
@@ -156,56 +187,195 @@ fn gravity(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Vector, SceneError> {
     }
 }
 
-/// `[grid]`: regular, cubic cells, a positive count along each axis.
-fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError> {
+/// `[grid]`: regular (cubic cells, a positive count along each axis) or terrain (over a DEM);
+/// each kind's fields only.
+fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceGrid, SceneError> {
     let g = &f.grid;
-    if g.kind != GridKind::Regular {
-        return Err(ctx.err(
-            "grid.kind",
-            Some("\"terrain\"".into()),
-            "the terrain-following grid is 2D only",
-            "\"regular\" in a 3D scene",
-            "use `kind = \"regular\"` (a 3D grid over a DEM is not available yet)",
-        ));
+    let regular_fields = [
+        ("grid.origin", g.origin.is_some()),
+        ("grid.cell", g.cell.is_some()),
+        ("grid.cells", g.cells.is_some()),
+    ];
+    let terrain_fields = [
+        ("grid.dem", g.dem.is_some()),
+        ("grid.from", g.from.is_some()),
+        ("grid.to", g.to.is_some()),
+        ("grid.plan_cell", g.plan_cell.is_some()),
+        ("grid.layer_height", g.layer_height.is_some()),
+        ("grid.layers", g.layers.is_some()),
+    ];
+    match g.kind {
+        GridKind::Terrain => {
+            if let Some((path, _)) = regular_fields.iter().find(|(_, here)| *here) {
+                return Err(ctx.foreign(
+                    path,
+                    "a terrain grid takes its plan from `from`, `to` \
+                     and `plan_cell`, its layers from `layer_height` and `layers`",
+                ));
+            }
+            terrain_grid(ctx, f).map(SpaceGrid::Terrain)
+        }
+        GridKind::Regular => {
+            if let Some((path, _)) = terrain_fields.iter().find(|(_, here)| *here) {
+                return Err(ctx.foreign(path, "it belongs to `kind = \"terrain\"`"));
+            }
+            regular_grid(ctx, f).map(SpaceGrid::Regular)
+        }
     }
-    if !g.origin.iter().all(|x| x.is_finite()) {
+}
+
+/// a regular grid's `origin`, `cell` and `cells`.
+fn regular_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError> {
+    let g = &f.grid;
+    let origin =
+        g.origin.ok_or_else(|| ctx.missing("grid.origin", "a regular grid", "[0.0, 0.0, 0.0]"))?;
+    let cell =
+        g.cell.ok_or_else(|| ctx.missing("grid.cell", "a regular grid", "[0.1, 0.1, 0.1]"))?;
+    let cells =
+        g.cells.ok_or_else(|| ctx.missing("grid.cells", "a regular grid", "[40, 20, 40]"))?;
+    if !origin.iter().all(|x| x.is_finite()) {
         return Err(ctx.err(
             "grid.origin",
-            Some(triple(g.origin)),
+            Some(triple(origin)),
             "the origin is not finite",
             "finite coordinates (m)",
             "give the lowest node, e.g. `origin = [0.0, 0.0, 0.0]`",
         ));
     }
-    let [dx, dy, dz] = g.cell;
+    let [dx, dy, dz] = cell;
     if !(finite_pos(dx) && dx == dy && dx == dz) {
         return Err(ctx.err(
             "grid.cell",
-            Some(triple(g.cell)),
+            Some(triple(cell)),
             "3D cells are cubes of positive finite side",
             "[h, h, h] with h > 0 (m)",
             "give the same size along each axis, e.g. `cell = [0.1, 0.1, 0.1]`",
         ));
     }
-    for (a, &n) in g.cells.iter().enumerate() {
+    for (a, &n) in cells.iter().enumerate() {
         if !(1..=MAX_CELLS_PER_AXIS as i64).contains(&n) {
             return Err(ctx.err(
                 "grid.cells",
-                Some(format!("{:?}", g.cells)),
+                Some(format!("{cells:?}")),
                 format!("{} cells along {}", n, ["x", "y", "z"][a]),
                 format!("1 ≤ cells ≤ {MAX_CELLS_PER_AXIS} along each axis"),
                 "give the number of cells along x, y and z, e.g. `cells = [40, 20, 40]`",
             ));
         }
     }
-    let cells = g.cells.map(|n| n as usize);
-    RegularGrid::new(Vector::from_array(g.origin), Vector::from_array(g.cell), cells).map_err(|e| {
+    let cells = cells.map(|n| n as usize);
+    RegularGrid::new(Vector::from_array(origin), Vector::from_array(cell), cells).map_err(|e| {
         ctx.err(
             "grid",
             None,
             e.to_string(),
             "a grid whose far corner is finite",
             "check origin, cell and cells",
+        )
+    })
+}
+
+/// The terrain-following grid over the DEM `dem`: plan lattice from `from` (south-west) to
+/// `to` (north-east) in map coordinates at `plan_cell`, the ground at each lattice node the
+/// DEM's bilinear height there; model x = map x, z = −map y.
+fn terrain_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<TerrainGrid, SceneError> {
+    let g = &f.grid;
+    let why = "a terrain grid";
+    let dem = g.dem.as_deref().ok_or_else(|| ctx.missing("grid.dem", why, "\"valley.asc\""))?;
+    let from = g.from.ok_or_else(|| ctx.missing("grid.from", why, "[x_west, y_south]"))?;
+    let to = g.to.ok_or_else(|| ctx.missing("grid.to", why, "[x_east, y_north]"))?;
+    let h = g.plan_cell.ok_or_else(|| ctx.missing("grid.plan_cell", why, "5.0"))?;
+    let r = g.layer_height.ok_or_else(|| ctx.missing("grid.layer_height", why, "2.0"))?;
+    let layers = g.layers.ok_or_else(|| ctx.missing("grid.layers", why, "20"))?;
+    for (path, v) in [("grid.plan_cell", h), ("grid.layer_height", r)] {
+        if !finite_pos(v) {
+            return Err(ctx.range(path, v, "0 < size < ∞ (m)", "give the size in metres"));
+        }
+    }
+    if !(1..=MAX_CELLS_PER_AXIS as i64).contains(&layers) {
+        return Err(ctx.range(
+            "grid.layers",
+            layers as f64,
+            &format!("1 ≤ layers ≤ {MAX_CELLS_PER_AXIS}"),
+            "give the number of cell layers above the ground, e.g. 20",
+        ));
+    }
+    let mut cells = [0usize; 2];
+    for a in 0..2 {
+        let span = to[a] - from[a];
+        let n = span / h;
+        let whole = n.round();
+        let path = ["grid.to", "grid.to"][a];
+        if !(from[a].is_finite() && to[a].is_finite() && span > 0.0) {
+            return Err(ctx.err(
+                path,
+                Some(format!("[{}, {}]", num(to[0]), num(to[1]))),
+                "`to` is not north-east of `from`",
+                "from = [x_west, y_south], to = [x_east, y_north], finite (m)",
+                "give the plan's south-west corner in `from` and its north-east corner in `to`",
+            ));
+        }
+        if !((1.0..=MAX_CELLS_PER_AXIS as f64).contains(&whole)
+            && (n - whole).abs() <= 1e-9 * whole)
+        {
+            return Err(ctx.err(
+                path,
+                Some(format!("[{}, {}]", num(to[0]), num(to[1]))),
+                format!(
+                    "the plan spans {} m along map {}: {} plan cells of {} m, not a whole number",
+                    num(span),
+                    ["x", "y"][a],
+                    num(n),
+                    num(h)
+                ),
+                format!("to − from a whole number (1 to {MAX_CELLS_PER_AXIS}) of plan_cell"),
+                format!("use to[{a}] = {} or change plan_cell", num(from[a] + whole.max(1.0) * h)),
+            ));
+        }
+        cells[a] = whole as usize;
+    }
+    let heights_bytes = (cells[0] + 1) as f64 * (cells[1] + 1) as f64 * 8.0;
+    let budget = crate::limits::available_memory().map_or(f64::INFINITY, |(b, _)| b as f64 / 4.0);
+    if heights_bytes > budget {
+        return Err(ctx.err(
+            "grid.plan_cell",
+            Some(num(h)),
+            format!("the plan has {} × {} cells: too many for the memory", cells[0], cells[1]),
+            "a plan whose lattice fits in a quarter of the memory",
+            "use a larger plan_cell or a smaller plan",
+        ));
+    }
+    let raster = mpm_dem::Raster::read_within(
+        &super::polyline::file_path(ctx, dem),
+        crate::limits::available_memory(),
+    )
+    .map_err(|e| super::polyline::dem_error(ctx, "grid.dem", e))?;
+    let [nx, nz] = cells;
+    let mut heights = Vec::with_capacity((nx + 1) * (nz + 1));
+    // lattice node (i, k) at x = x_west + i h, z = −y_north + k h: map y = y_north − k h
+    for k in 0..=nz {
+        for i in 0..=nx {
+            let (x, y) = (from[0] + i as f64 * h, to[1] - k as f64 * h);
+            let z =
+                raster.height(x, y).map_err(|e| super::polyline::dem_error(ctx, "grid.dem", e))?;
+            heights.push(z);
+        }
+    }
+    TerrainGrid::new(TerrainGridSpec {
+        origin: [from[0], -to[1]],
+        spacing: [h, h],
+        cells,
+        heights,
+        layer_height: r,
+        layers: layers as usize,
+    })
+    .map_err(|e| {
+        ctx.err(
+            "grid",
+            None,
+            e.to_string(),
+            "a terrain grid whose cells are not degenerate",
+            "check the DEM, plan_cell and layer_height",
         )
     })
 }
@@ -371,10 +541,10 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
 fn seeds(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
-    grid: &RegularGrid,
+    grid: &SpaceGrid,
     used: &[&str],
 ) -> Result<(Vec<SpaceSeed>, usize), SceneError> {
-    let cell = grid.cell_size().x;
+    let cell = grid.plan_cell();
     let mut seeds: Vec<SpaceSeed> = Vec::new();
     let mut shapes: Vec<Shape> = Vec::new();
     let mut gimp_ppc = 1;
@@ -397,7 +567,11 @@ fn seeds(
         if !(estimate.is_finite() && seeds.len() as f64 + estimate <= MAX_PARTICLES as f64) {
             return Err(bodies::too_many(ctx, &base));
         }
-        let fill = generate::fill(&shape, spacing);
+        let mut fill = generate::fill(&shape, spacing);
+        if let SpaceGrid::Terrain(t) = grid {
+            // over a DEM a body is the part of its shape above the ground
+            fill.retain(|s| s.position.y > t.ground_height(s.position.x, s.position.z));
+        }
         if fill.is_empty() {
             return Err(bodies::no_particle(ctx, &base, spacing));
         }
@@ -461,6 +635,7 @@ fn law(
 fn config(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
+    grid: &SpaceGrid,
     settings: &solver::Settings,
     gravity: Vector,
     materials: &MaterialsBuilt,
@@ -483,10 +658,19 @@ fn config(
                 "remove `left_wall` and `right_wall`, or `periodic`",
             ));
         }
-        let [nx, _, _] = f.grid.cells;
+        let SpaceGrid::Regular(g) = grid else {
+            return Err(ctx.err(
+                "boundaries.periodic",
+                Some("true".into()),
+                "periodic sides need a regular grid (a terrain's two sides differ)",
+                "periodic = true with `[grid] kind = \"regular\"`",
+                "remove `periodic`, or use a regular grid",
+            ));
+        };
+        let nx = g.cells()[0];
         Some(Periodic {
-            x_min: f.grid.origin[0],
-            length: nx as f64 * f.grid.cell[0],
+            x_min: g.origin().x,
+            length: nx as f64 * g.cell_size().x,
             columns: nx as u32,
         })
     } else {
@@ -577,7 +761,7 @@ fn first_dt(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
     config: &SolverConfig,
-    grid: &RegularGrid,
+    grid: &SpaceGrid,
     materials: &MaterialsBuilt,
     seeds: &[SpaceSeed],
     max_steps: u64,
@@ -623,7 +807,7 @@ fn first_dt(
 }
 
 /// `[output]` of a 3D scene: frames and series; the 2D-only outputs are refused.
-fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
+fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput, SceneError> {
     let o = &f.output;
     let refused = [
         ("output.probes", o.probes.is_some()),
@@ -666,7 +850,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
         }
     }
     let hazard_maps = o.hazard_maps.unwrap_or(false);
-    let [nx, _, nz] = f.grid.cells;
+    let [nx, _, nz] = grid.cells();
     // per plan cell: its maxima (56 B) and one observation's sums (64 B)
     let plan_bytes = (nx as f64) * (nz as f64) * 120.0;
     let budget = crate::limits::available_memory().map_or(f64::INFINITY, |(b, _)| b as f64 / 4.0);
@@ -698,7 +882,8 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceOutput, SceneError> {
 
 #[cfg(test)]
 mod tests {
-    use super::load_space_str;
+    use super::{load_space_str, load_space_str_in};
+    use crate::space::SpaceGrid;
 
     /// A 3D scene with a box, a cylinder and a prism over a rough floor; `extra` is appended
     /// (after the last table) and `swap` replaces one text for another.
@@ -878,5 +1063,96 @@ end_time = 0.1
         .unwrap();
         let e = flume.modified(|f| f.output.runout_direction = Some([1.0, 0.0, 0.0])).unwrap_err();
         assert!(e.to_string().contains("`output.runout_direction`"), "{e}");
+    }
+
+    /// a terrain scene over `dem.asc` in `dir`: a plane falling 0.5 m per metre towards map
+    /// east (30 × 20 cells of 0.1 m, south-west corner (100, 200)), a box released on it.
+    fn terrain_scene(dir: &std::path::Path, grid_extra: &str, body_min_y: f64) -> String {
+        let mut dem =
+            String::from("ncols 30\nnrows 20\nxllcorner 100\nyllcorner 200\ncellsize 0.1\n");
+        for _row in 0..20 {
+            let line: Vec<String> =
+                (0..30).map(|c| format!("{}", 10.0 - 0.5 * 0.1 * (c as f64 + 0.5))).collect();
+            dem += &(line.join(" ") + "\n");
+        }
+        std::fs::write(dir.join("dem.asc"), dem).unwrap();
+        format!(
+            r#"
+[grid]
+dimension = 3
+kind = "terrain"
+dem = "dem.asc"
+from = [100.05, 200.05]
+to = [102.95, 201.95]
+plan_cell = 0.1
+layer_height = 0.1
+layers = 12
+{grid_extra}
+[materials.sand]
+kind = "drucker_prager"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+cohesion = 0.0
+friction_angle_deg = 30.0
+cone_match = "outer"
+
+[[bodies]]
+material = "sand"
+shape = "box"
+min = [100.5, {body_min_y}, -201.5]
+max = [101.0, 10.5, -200.5]
+
+[boundaries]
+ground = "rough"
+
+[solver]
+end_time = 0.1
+"#
+        )
+    }
+
+    /// A terrain grid over a DEM: the plan from `from` to `to` at `plan_cell` (map y = −z),
+    /// the ground the DEM's plane at every lattice node, a box body kept above the ground
+    /// only; the terrain's fields refused on a regular grid and the regular ones on a terrain,
+    /// the plan not a whole number of cells refused with the fix, B-splines refused.
+    #[test]
+    fn a_terrain_grid_over_a_dem_is_read_and_checked() {
+        let dir = std::env::temp_dir().join(format!("mpm-terrain3d-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = terrain_scene(&dir, "", 9.0);
+        let s = load_space_str_in(&text, "t.toml", &dir).unwrap();
+        let SpaceGrid::Terrain(t) = &s.grid else { panic!("{:?}", s.grid) };
+        assert_eq!(t.plan_cells(), [29, 19]);
+        assert_eq!(t.plan_origin(), [100.05, -201.95]);
+        // the plane z = 10 − 0.5 (x − 100), exact under bilinear interpolation
+        for (x, z) in [(100.05, -201.95), (101.3, -200.7), (102.95, -200.05)] {
+            let g = t.ground_height(x, z);
+            assert!((g - (10.0 - 0.5 * (x - 100.0))).abs() < 1e-12, "{x} {z}: {g}");
+        }
+        assert!(!s.seeds.is_empty());
+        for seed in &s.seeds {
+            let p = seed.position;
+            assert!(p.y > t.ground_height(p.x, p.z), "{p}");
+        }
+        // the box from y = 9 m: its part above the plane (which is 9.75 to 9.5 m under it)
+        let below = s.seeds.iter().filter(|q| q.position.y < 9.5).count();
+        assert_eq!(below, 0);
+        // without a directory the DEM is not found: the error names the field
+        assert!(error(&text).contains("grid.dem"), "{}", error(&text));
+        let e = load_space_str_in(&terrain_scene(&dir, "cells = [1, 1, 1]", 9.0), "t.toml", &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("grid.cells"), "{e}");
+        let e = load_space_str_in(&text.replace("to = [102.95", "to = [102.97"), "t.toml", &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("grid.to") && e.contains("102.95"), "{e}");
+        let spline = text.replace("[solver]\n", "[solver]\nshape_function = \"bspline\"\n");
+        let e = load_space_str_in(&spline, "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("solver.shape_function") && e.contains("trilinear"), "{e}");
+        let e = error(&scene(("cells = [20, 10, 10]", "cells = [20, 10, 10]\nlayers = 3"), ""));
+        assert!(e.contains("grid.layers"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
