@@ -5,6 +5,7 @@
 //! The solver-level cases call the drivers of the `mpm-tests` library, the same code the workspace
 //! tests assert on; the element tests call `mpm_constitutive::element_test`.
 
+mod flume3d;
 mod mixed;
 mod open_core;
 mod three_d;
@@ -489,6 +490,7 @@ pub fn run(quick: bool) -> Result<bool> {
     geostatic_rows(&mut rows);
     mixed::rows(&mut rows);
     three_d::rows(&mut rows, quick);
+    flume3d::rows(&mut rows, quick);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
     let exact = (0..=1000)
         .map(|k| k as f64 * 0.05)
