@@ -78,6 +78,17 @@ pub struct SpaceGridSpec {
     /// terrain: cell layers above the ground.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layers: Option<i64>,
+    /// terrain: a rupture-surface raster (as `dem`): the ground is the lower of the DEM and
+    /// it wherever it has a height; a `shape = "release"` body fills what lies between.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rupture: Option<String>,
+    /// terrain: a release area, a polygon in map coordinates `[[x, y], ...]` (m): the ground
+    /// at the lattice nodes inside it is cut `release_depth` below the DEM.
+    #[serde(default, deserialize_with = "exact::pairs", skip_serializing_if = "Option::is_none")]
+    pub release_polygon: Option<Vec<[f64; 2]>>,
+    /// terrain: the release area's depth, measured vertically (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release_depth: Option<f64>,
 }
 
 /// Shape of a 3D body.
@@ -91,6 +102,9 @@ pub enum SpaceShapeKind {
     Cylinder,
     /// a polygon `vertices` extruded along `axis` from `from` to `to`.
     Prism,
+    /// (terrain grids) the release volume: everything between the grid's ground, cut into the
+    /// DEM by `[grid] rupture` or `release_polygon` and `release_depth`, and the DEM's surface.
+    Release,
 }
 
 /// A coordinate axis (`"x"`, `"y"`, `"z"`).

@@ -75,7 +75,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let gravity = gravity(ctx, &f)?;
     // the settings the dimensions share (gravity, 3 components here, was read above)
     let settings = solver::settings(ctx, &SolverSpec { gravity: None, ..f.solver.clone() })?;
-    let grid = grid(ctx, &f)?;
+    let (grid, surface) = grid(ctx, &f)?;
     let shape_function = f
         .solver
         .shape_function
@@ -102,7 +102,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     }
     let names: Vec<&str> = f.bodies.iter().map(|b| b.material.as_str()).collect();
     let (materials, used) = materials::select(ctx, &f.materials, &names, &built)?;
-    let (seeds, gimp_ppc) = seeds(ctx, &f, &grid, &used)?;
+    let (seeds, gimp_ppc) = seeds(ctx, &f, (&grid, surface.as_ref()), &used)?;
     let config = config(ctx, &f, &grid, &settings, gravity, &materials)?;
     for (k, w) in config.walls.iter().enumerate() {
         if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
@@ -189,7 +189,7 @@ fn gravity(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Vector, SceneError> {
 
 /// `[grid]`: regular (cubic cells, a positive count along each axis) or terrain (over a DEM);
 /// each kind's fields only.
-fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceGrid, SceneError> {
+fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<(SpaceGrid, Option<TerrainGrid>), SceneError> {
     let g = &f.grid;
     let regular_fields = [
         ("grid.origin", g.origin.is_some()),
@@ -203,6 +203,9 @@ fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceGrid, SceneError> {
         ("grid.plan_cell", g.plan_cell.is_some()),
         ("grid.layer_height", g.layer_height.is_some()),
         ("grid.layers", g.layers.is_some()),
+        ("grid.rupture", g.rupture.is_some()),
+        ("grid.release_polygon", g.release_polygon.is_some()),
+        ("grid.release_depth", g.release_depth.is_some()),
     ];
     match g.kind {
         GridKind::Terrain => {
@@ -213,13 +216,13 @@ fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<SpaceGrid, SceneError> {
                      and `plan_cell`, its layers from `layer_height` and `layers`",
                 ));
             }
-            terrain_grid(ctx, f).map(SpaceGrid::Terrain)
+            terrain_grid(ctx, f).map(|(t, surface)| (SpaceGrid::Terrain(t), surface))
         }
         GridKind::Regular => {
             if let Some((path, _)) = terrain_fields.iter().find(|(_, here)| *here) {
                 return Err(ctx.foreign(path, "it belongs to `kind = \"terrain\"`"));
             }
-            regular_grid(ctx, f).map(SpaceGrid::Regular)
+            regular_grid(ctx, f).map(|g| (SpaceGrid::Regular(g), None))
         }
     }
 }
@@ -277,8 +280,13 @@ fn regular_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError>
 
 /// The terrain-following grid over the DEM `dem`: plan lattice from `from` (south-west) to
 /// `to` (north-east) in map coordinates at `plan_cell`, the ground at each lattice node the
-/// DEM's bilinear height there; model x = map x, z = −map y.
-fn terrain_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<TerrainGrid, SceneError> {
+/// DEM's bilinear height there, cut down by `rupture` or the release area; model x = map x,
+/// z = −map y. With a cut, the DEM's own surface on the same lattice comes too (what a release
+/// body fills up to).
+fn terrain_grid(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+) -> Result<(TerrainGrid, Option<TerrainGrid>), SceneError> {
     let g = &f.grid;
     let why = "a terrain grid";
     let dem = g.dem.as_deref().ok_or_else(|| ctx.missing("grid.dem", why, "\"valley.asc\""))?;
@@ -361,23 +369,123 @@ fn terrain_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<TerrainGrid, SceneError>
             heights.push(z);
         }
     }
-    TerrainGrid::new(TerrainGridSpec {
-        origin: [from[0], -to[1]],
-        spacing: [h, h],
-        cells,
-        heights,
-        layer_height: r,
-        layers: layers as usize,
-    })
-    .map_err(|e| {
-        ctx.err(
-            "grid",
-            None,
-            e.to_string(),
-            "a terrain grid whose cells are not degenerate",
-            "check the DEM, plan_cell and layer_height",
+    let surface = heights.clone();
+    let node_map = |i: usize, k: usize| (from[0] + i as f64 * h, to[1] - k as f64 * h);
+    if let Some(rupture) = &g.rupture {
+        let raster = mpm_dem::Raster::read_within(
+            &super::polyline::file_path(ctx, rupture),
+            crate::limits::available_memory(),
         )
-    })
+        .map_err(|e| super::polyline::dem_error(ctx, "grid.rupture", e))?;
+        // where the rupture raster has a height (inside it, not a hole) the ground is the lower
+        for k in 0..=nz {
+            for i in 0..=nx {
+                let (x, y) = node_map(i, k);
+                if let Ok(z) = raster.height(x, y) {
+                    let at = &mut heights[k * (nx + 1) + i];
+                    *at = at.min(z);
+                }
+            }
+        }
+    }
+    match (&g.release_polygon, g.release_depth) {
+        (None, None) => {}
+        (Some(_), None) => {
+            return Err(ctx.missing("grid.release_depth", "a release polygon", "2.0"));
+        }
+        (None, Some(_)) => {
+            return Err(ctx.missing("grid.release_polygon", "a release depth", "[[x, y], ...]"));
+        }
+        (Some(polygon), Some(depth)) => {
+            if !finite_pos(depth) {
+                return Err(ctx.range(
+                    "grid.release_depth",
+                    depth,
+                    "> 0 (m)",
+                    "give the release's depth below the DEM in metres",
+                ));
+            }
+            if polygon.len() < 3 || !polygon.iter().flatten().all(|v| v.is_finite()) {
+                return Err(ctx.err(
+                    "grid.release_polygon",
+                    Some(format!("{} point(s)", polygon.len())),
+                    "a release polygon has at least 3 finite corners",
+                    "[[x, y], ...] in map coordinates (m), 3 or more",
+                    "give the release area's corners in order",
+                ));
+            }
+            let vertices: Vec<DVec2> = polygon.iter().map(|p| DVec2::from(*p)).collect();
+            let mut inside = 0usize;
+            for k in 0..=nz {
+                for i in 0..=nx {
+                    let (x, y) = node_map(i, k);
+                    if generate::inside_polygon(&vertices, DVec2::new(x, y)) {
+                        heights[k * (nx + 1) + i] -= depth;
+                        inside += 1;
+                    }
+                }
+            }
+            if inside == 0 {
+                return Err(ctx.err(
+                    "grid.release_polygon",
+                    None,
+                    "no lattice node of the plan lies inside the release polygon",
+                    "a polygon over the plan, larger than a plan cell",
+                    "check its map coordinates against `from` and `to`",
+                ));
+            }
+        }
+    }
+    let cut = heights != surface;
+    let build = |heights: Vec<f64>| {
+        TerrainGrid::new(TerrainGridSpec {
+            origin: [from[0], -to[1]],
+            spacing: [h, h],
+            cells,
+            heights,
+            layer_height: r,
+            layers: layers as usize,
+        })
+        .map_err(|e| {
+            ctx.err(
+                "grid",
+                None,
+                e.to_string(),
+                "a terrain grid whose cells are not degenerate",
+                "check the DEM, plan_cell and layer_height",
+            )
+        })
+    };
+    let surface = if cut { Some(build(surface)?) } else { None };
+    Ok((build(heights)?, surface))
+}
+
+/// The release body's particles: in columns on a plan lattice of spacing `s`, from the grid's
+/// ground up to the DEM's `surface`, as many as the depth holds at `s` (at least one), evenly:
+/// a column's volume s² (surface − ground) exactly, sampled at its plan centre. Columns less
+/// than 0.001 s deep are left out.
+fn release_fill(t: &TerrainGrid, surface: &TerrainGrid, s: f64) -> Vec<(Vector, f64)> {
+    let [x0, z0] = t.plan_origin();
+    let [nx, nz] = t.plan_cells();
+    let h = t.spacing()[0];
+    let (cols, rows) = ((nx as f64 * h / s).round() as usize, (nz as f64 * h / s).round() as usize);
+    let mut out = Vec::new();
+    for c in 0..rows {
+        for a in 0..cols {
+            let (x, z) = (x0 + (a as f64 + 0.5) * s, z0 + (c as f64 + 0.5) * s);
+            let (g, top) = (t.ground_height(x, z), surface.ground_height(x, z));
+            let depth = top - g;
+            if depth < 1e-3 * s {
+                continue;
+            }
+            let n = (depth / s).round().max(1.0);
+            let dy = depth / n;
+            for k in 0..n as usize {
+                out.push((Vector::new(x, g + (k as f64 + 0.5) * dy, z), s * s * dy));
+            }
+        }
+    }
+    out
 }
 
 /// the body's shape, its fields checked against its `shape`.
@@ -405,6 +513,13 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
         }
     };
     match b.shape {
+        SpaceShapeKind::Release => Err(ctx.err(
+            &p("shape"),
+            Some("\"release\"".into()),
+            "a release body has no shape of its own",
+            "box, cylinder or prism",
+            "give the body a shape",
+        )),
         SpaceShapeKind::Box => {
             foreign(
                 &[
@@ -541,7 +656,7 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
 fn seeds(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
-    grid: &SpaceGrid,
+    (grid, surface): (&SpaceGrid, Option<&TerrainGrid>),
     used: &[&str],
 ) -> Result<(Vec<SpaceSeed>, usize), SceneError> {
     let cell = grid.plan_cell();
@@ -550,7 +665,6 @@ fn seeds(
     let mut gimp_ppc = 1;
     for (b, body) in f.bodies.iter().enumerate() {
         let base = format!("bodies[{b}]");
-        let shape = body_shape(ctx, &base, body)?;
         let ppc = body.particles_per_cell.unwrap_or(2);
         if !(1..=MAX_PARTICLES_PER_CELL).contains(&ppc) {
             return Err(ctx.range(
@@ -562,16 +676,23 @@ fn seeds(
         }
         gimp_ppc = gimp_ppc.max(ppc as usize);
         let spacing = cell / ppc as f64;
-        let (lo, hi) = shape.bounds();
-        let estimate = ((hi - lo) / spacing).element_product();
-        if !(estimate.is_finite() && seeds.len() as f64 + estimate <= MAX_PARTICLES as f64) {
-            return Err(bodies::too_many(ctx, &base));
-        }
-        let mut fill = generate::fill(&shape, spacing);
-        if let SpaceGrid::Terrain(t) = grid {
-            // over a DEM a body is the part of its shape above the ground
-            fill.retain(|s| s.position.y > t.ground_height(s.position.x, s.position.z));
-        }
+        let (fill, shape) = if body.shape == SpaceShapeKind::Release {
+            let fill = release_body(ctx, &base, body, (grid, surface), spacing, seeds.len())?;
+            (fill, None)
+        } else {
+            let shape = body_shape(ctx, &base, body)?;
+            let (lo, hi) = shape.bounds();
+            let estimate = ((hi - lo) / spacing).element_product();
+            if !(estimate.is_finite() && seeds.len() as f64 + estimate <= MAX_PARTICLES as f64) {
+                return Err(bodies::too_many(ctx, &base));
+            }
+            let mut fill = generate::fill(&shape, spacing);
+            if let SpaceGrid::Terrain(t) = grid {
+                // over a DEM a body is the part of its shape above the ground
+                fill.retain(|s| s.position.y > t.ground_height(s.position.x, s.position.z));
+            }
+            (fill, Some(shape))
+        };
         if fill.is_empty() {
             return Err(bodies::no_particle(ctx, &base, spacing));
         }
@@ -617,9 +738,69 @@ fn seeds(
             material: material as u16,
             body: b as u16,
         }));
-        shapes.push(shape);
+        shapes.extend(shape);
     }
     Ok((seeds, gimp_ppc))
+}
+
+/// A `shape = "release"` body: the release volume between the terrain grid's ground and the
+/// DEM's surface ([`release_fill`]), at `spacing`; refused without a cut terrain, with another
+/// shape's fields, or with more particles than a scene may hold (`already` are taken).
+fn release_body(
+    ctx: &Ctx<'_>,
+    base: &str,
+    b: &SpaceBodySpec,
+    (grid, surface): (&SpaceGrid, Option<&TerrainGrid>),
+    spacing: f64,
+    already: usize,
+) -> Result<Vec<generate::Seed>, SceneError> {
+    let p = |field: &str| format!("{base}.{field}");
+    let present = [
+        ("min", b.min.is_some()),
+        ("max", b.max.is_some()),
+        ("base", b.base.is_some()),
+        ("direction", b.direction.is_some()),
+        ("radius", b.radius.is_some()),
+        ("height", b.height.is_some()),
+        ("vertices", b.vertices.is_some()),
+        ("axis", b.axis.is_some()),
+        ("from", b.from.is_some()),
+        ("to", b.to.is_some()),
+    ];
+    if let Some((field, _)) = present.iter().find(|(_, here)| *here) {
+        return Err(ctx.foreign(&p(field), "a release body is the volume the grid's cut leaves"));
+    }
+    let (SpaceGrid::Terrain(t), Some(surface)) = (grid, surface) else {
+        return Err(ctx.err(
+            &p("shape"),
+            Some("\"release\"".into()),
+            "a release body fills the volume cut into the terrain, and this grid has no cut",
+            "`[grid] kind = \"terrain\"` with `rupture` or `release_polygon` and `release_depth`",
+            "cut the release into the DEM in `[grid]`, or give the body a shape",
+        ));
+    };
+    let [nx, nz] = t.plan_cells();
+    let mut deepest: f64 = 0.0;
+    for k in 0..=nz as i32 {
+        for i in 0..=nx as i32 {
+            let node = mpm_grid3d::NodeId::new(i, 0, k);
+            deepest = deepest.max(surface.node_position(node).y - t.node_position(node).y);
+        }
+    }
+    let h = t.spacing()[0];
+    let estimate =
+        (nx as f64 * h / spacing) * (nz as f64 * h / spacing) * (deepest / spacing + 1.0);
+    if !(estimate.is_finite() && already as f64 + estimate <= 4.0 * MAX_PARTICLES as f64) {
+        return Err(bodies::too_many(ctx, base));
+    }
+    let fill: Vec<generate::Seed> = release_fill(t, surface, spacing)
+        .into_iter()
+        .map(|(position, volume)| generate::Seed { position, volume })
+        .collect();
+    if already + fill.len() > MAX_PARTICLES {
+        return Err(bodies::too_many(ctx, base));
+    }
+    Ok(fill)
 }
 
 /// the friction law of a face, if the scene names one.
@@ -1153,6 +1334,69 @@ end_time = 0.1
         assert!(e.contains("solver.shape_function") && e.contains("trilinear"), "{e}");
         let e = error(&scene(("cells = [20, 10, 10]", "cells = [20, 10, 10]\nlayers = 3"), ""));
         assert!(e.contains("grid.layers"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A release area cut 0.3 m into the DEM's plane: the release body's particles fill
+    /// exactly the cut, 0.3 m × (the lattice nodes inside the polygon) × plan_cell² (each
+    /// node's bilinear hat holds plan_cell² of plan; the columns' midpoint rule is exact on a
+    /// bilinear depth), between the ground and the DEM's surface; a rupture raster 0.2 m below
+    /// the DEM over its own extent cuts the same way; a release body without a cut, or with a
+    /// box's fields, is refused.
+    #[test]
+    fn a_release_volume_fills_exactly_what_is_cut_into_the_dem() {
+        let dir = std::env::temp_dir().join(format!("mpm-release3d-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = terrain_scene(&dir, "", 9.0);
+        let body = "shape = \"box\"\nmin = [100.5, 9, -201.5]\nmax = [101.0, 10.5, -200.5]";
+        assert!(text.contains(body));
+        let release = text.replace(body, "shape = \"release\"");
+        // a polygon holding lattice nodes x = 100.55 … 101.45 (10), y = 200.55 … 201.25 (8)
+        let cut = "release_polygon = [[100.5, 200.5], [101.5, 200.5], [101.5, 201.3], [100.5, 201.3]]\n\
+                   release_depth = 0.3";
+        let s = load_space_str_in(
+            &release.replace("layers = 12\n", &format!("layers = 12\n{cut}\n")),
+            "t.toml",
+            &dir,
+        )
+        .unwrap();
+        let volume: f64 = s.seeds.iter().map(|q| q.volume).sum();
+        let expected = 0.3 * 80.0 * 0.01;
+        assert!((volume - expected).abs() < 1e-9 * expected, "{volume} vs {expected}");
+        let SpaceGrid::Terrain(t) = &s.grid else { panic!() };
+        for q in &s.seeds {
+            let p = q.position;
+            let g = t.ground_height(p.x, p.z);
+            let top = 10.0 - 0.5 * (p.x - 100.0);
+            assert!(p.y > g && p.y < top + 1e-12, "{p}: ground {g}, surface {top}");
+        }
+        // a rupture raster 0.2 m below the DEM over x ∈ [100.5, 101.5], y ∈ [200.5, 201.5]
+        let mut r =
+            String::from("ncols 10\nnrows 10\nxllcorner 100.5\nyllcorner 200.5\ncellsize 0.1\n");
+        for _ in 0..10 {
+            let line: Vec<String> = (0..10)
+                .map(|c| format!("{}", 9.8 - 0.5 * (0.5 + 0.1 * (c as f64 + 0.5))))
+                .collect();
+            r += &(line.join(" ") + "\n");
+        }
+        std::fs::write(dir.join("rupture.asc"), r).unwrap();
+        let with_rupture =
+            release.replace("layers = 12\n", "layers = 12\nrupture = \"rupture.asc\"\n");
+        let s = load_space_str_in(&with_rupture, "t.toml", &dir).unwrap();
+        let volume: f64 = s.seeds.iter().map(|q| q.volume).sum();
+        // lattice nodes within the raster's reach: x 100.55 … 101.45, y 200.55 … 201.45
+        let expected = 0.2 * 100.0 * 0.01;
+        assert!((volume - expected).abs() < 1e-9 * expected, "{volume} vs {expected}");
+        let e = load_space_str_in(&release, "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("bodies[0].shape") && e.contains("no cut"), "{e}");
+        let e = load_space_str_in(
+            &release.replace("shape = \"release\"", "shape = \"release\"\nradius = 1.0"),
+            "t.toml",
+            &dir,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("bodies[0].radius"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
