@@ -15,7 +15,9 @@
 //! on 120 × 60 cells of 5 m (x ∈ [0, 600], y ∈ [0, 300]). The rupture surface lies under the
 //! section along the gully (from (10, 150) to (590, 150)): between stations 150 and 250 m (on
 //! ground sloping 26°–40°) it is `12 sin²(π (s − 150)/100)` m below the ground, a 100 m long
-//! slide up to 12 m deep whose rupture surface meets the ground tangentially.
+//! slide up to 12 m deep whose rupture surface meets the ground tangentially. The 3D slide
+//! (`rupture3d.asc`, 120 × 120 m from (150, 90)) tapers that depth across the gully
+//! ([`rupture_depth`]).
 
 use std::path::Path;
 
@@ -52,10 +54,36 @@ pub fn run() -> Result<bool> {
         csv.push_str(&format!("{s},{}\n", ground - depth.max(0.0)));
     }
     std::fs::write(dir.join("rupture.csv"), csv)?;
+    // the 3D slide's rupture surface: the section's, tapered across the gully
+    let (c0, r0, n3) = (30usize, 18usize, 24usize);
+    let mut z3 = Vec::with_capacity(n3 * n3);
+    for r in 0..n3 {
+        for c in 0..n3 {
+            let (x, y) =
+                ((c0 + c) as f64 * cell + 0.5 * cell, north - (r0 + r) as f64 * cell - 0.5 * cell);
+            z3.push(height(x, y) - rupture_depth(x, y));
+        }
+    }
+    let west = c0 as f64 * cell;
+    let top = north - r0 as f64 * cell;
+    let rupture = Raster::new("rupture3d", [n3, n3], cell, [west, top], z3, None)?;
+    mpm_dem::ascii::write(&rupture, &dir.join("rupture3d.asc"))?;
     println!(
-        "wrote {0}/valley_side.asc, {0}/valley_side.tif ({cols} × {rows} cells of {cell} m) and \
-         {0}/rupture.csv",
+        "wrote {0}/valley_side.asc, {0}/valley_side.tif ({cols} × {rows} cells of {cell} m), \
+         {0}/rupture.csv and {0}/rupture3d.asc",
         dir.display()
     );
     Ok(true)
+}
+
+/// The 3D slide's depth below the ground at map point (x, y) (m): the section's
+/// `12 sin²(π (x − 160)/100)` between x = 160 and 260 m (stations 150–250), times
+/// `cos²(π (y − 150)/80)` within 40 m of the gully's axis: a spoon 100 m long, 80 m wide and up
+/// to 12 m deep, meeting the ground tangentially all round.
+pub fn rupture_depth(x: f64, y: f64) -> f64 {
+    if !((160.0..=260.0).contains(&x) && (y - 150.0).abs() <= 40.0) {
+        return 0.0;
+    }
+    let pi = std::f64::consts::PI;
+    12.0 * (pi * (x - 160.0) / 100.0).sin().powi(2) * (pi * (y - 150.0) / 80.0).cos().powi(2)
 }
