@@ -8,6 +8,8 @@
 //! - [`flat_dem`]: a flat DEM against the regular 3D grid: the same answer.
 //! - [`no_penetration`]: sand dropped and thrown over a DEM of planar cells of many slopes and
 //!   orientations; every particle's height above the ground at every step.
+//! - [`apic_momentum`]: an elastic block spinning and drifting in free flight over a twisted
+//!   DEM under APIC: its momentum must not change.
 
 use mpm_constitutive::{ConstitutiveModel, LinearElastic};
 use mpm_contact3d::Friction;
@@ -306,4 +308,62 @@ pub fn no_penetration() -> Result<NoPenetration, CaseError> {
     r.travel = (d.x * d.x + d.z * d.z).sqrt();
     r.steps = s.step_count();
     Ok(r)
+}
+
+/// An elastic block (0.6 × 0.4 × 0.6 m, 0.1 m cells, 2³ particles per cell) in free flight,
+/// without gravity, over a twisted DEM (bilinear cells of slopes up to ~35°), translating at
+/// (1, 0.2, −0.5) m/s and spinning at (0.1, 0.4, 0.2) rad/s, under MUSL and APIC for 25 steps:
+/// no boundary touches it, so its momentum must stay m v₀ to round-off. The largest relative
+/// change is returned, with the steps taken. (25 steps: this spinning block turns unstable
+/// under trilinear APIC after about 35 steps on the regular grid as on the terrain grid, a
+/// defect of its own, not of the terrain grid.)
+pub fn apic_momentum() -> Result<(f64, u64), CaseError> {
+    let cell = 0.1;
+    let [nx, nz] = [24, 24];
+    let heights: Vec<f64> = (0..=nz)
+        .flat_map(|k| (0..=nx).map(move |i| (i, k)))
+        .map(|(i, k)| {
+            let (x, z) = (i as f64 * cell, k as f64 * cell);
+            0.3 * x - 0.2 * z + 0.4 * (x - 1.2) * (z - 1.2) + 0.1 * ((i * 7 + k * 3) % 4) as f64
+        })
+        .collect();
+    let grid = TerrainGrid::new(TerrainGridSpec {
+        origin: [0.0, 0.0],
+        spacing: [cell, cell],
+        cells: [nx, nz],
+        heights,
+        layer_height: cell,
+        layers: 30,
+    })
+    .map_err(setup)?;
+    let top = (0..=nz)
+        .flat_map(|k| (0..=nx).map(move |i| (i, k)))
+        .map(|(i, k)| grid.node_position(mpm_grid3d::NodeId::new(i as i32, 0, k as i32)).y)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let base = Vector::new(0.9, top + 0.4, 0.9);
+    let frame = [Vector::X, Vector::Y, Vector::Z];
+    let (v0, omega) = (Vector::new(1.0, 0.2, -0.5), Vector::new(0.1, 0.4, 0.2));
+    let mut particles = frame_box(base, frame, [0.6, 0.4, 0.6], cell / 2.0, v0, ());
+    let centre = mass_mean(&particles, &particles.position);
+    for q in 0..particles.len() {
+        particles.velocity[q] = v0 + omega.cross(particles.position[q] - centre);
+    }
+    let config = SolverConfig {
+        scheme: Scheme::Musl,
+        transfer: Transfer::Apic,
+        time_step: TimeStep::Courant(0.3),
+        gravity: Vector::ZERO,
+        // (the small-mass rule drops momentum at nearly empty nodes: off, to see the scatter's)
+        small_mass_ratio: 0.0,
+        ..Default::default()
+    };
+    let elastic = LinearElastic::from_young_poisson(E, NU).map_err(setup)?;
+    let mut s = Solver::new(Bilinear(grid), vec![elastic], particles, config)?;
+    let p0 = s.particles().momentum();
+    let mut worst: f64 = 0.0;
+    for _ in 0..25 {
+        s.step()?;
+        worst = worst.max((s.particles().momentum() - p0).length() / p0.length());
+    }
+    Ok((worst, s.step_count()))
 }

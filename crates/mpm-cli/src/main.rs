@@ -631,6 +631,13 @@ fn print_summary(s: &RunSummary, out: &Path) {
             o.max_observed_thickness,
             o.iou
         );
+        if let (Some(lateral), Some(area)) = (o.lateral_error, o.area_iou) {
+            eprintln!(
+                "mpm: in plan: lateral spread {lateral:+.3} m, area overlap (IoU) {area:.3} over \
+                 {} cells",
+                o.stations
+            );
+        }
     }
     if let Some(e) = &s.error {
         eprintln!("mpm: {e}");

@@ -57,6 +57,8 @@ pub struct TerrainFactors {
 impl ShapeFunctions<4> for Bilinear<TerrainGrid> {
     type Factors = TerrainFactors;
 
+    const SEPARABLE_NODES: bool = false;
+
     #[inline(always)]
     fn factors(&self, x: Vector) -> Result<(NodeId, TerrainFactors), LocateError> {
         let loc = self.0.locate_parts(x)?;
@@ -207,6 +209,8 @@ impl ShapeFunctions<8> for Bilinear<RegularGrid> {
 #[cfg(feature = "dim3")]
 impl ShapeFunctions<8> for Bilinear<crate::TerrainGrid> {
     type Factors = crate::TerrainFactors;
+
+    const SEPARABLE_NODES: bool = false;
 
     #[inline(always)]
     fn factors(&self, x: Vector) -> Result<(NodeId, crate::TerrainFactors), LocateError> {

@@ -74,6 +74,11 @@ pub trait ShapeFunctions<const N: usize>: Send + Sync {
     /// streaming the stencil through memory again.
     type Factors: Copy + Default + std::fmt::Debug + Send + Sync;
 
+    /// whether every node's position is a tensor product of per-axis coordinates (x_i, y_j,
+    /// z_k), as on the regular grids: a scatter may then factorise C (x_i − x_p) per axis. A
+    /// terrain grid's node heights depend on their column, so it says false.
+    const SEPARABLE_NODES: bool = true;
+
     /// the first (lowest) node of the stencil at `x` and the factors of its weights and
     /// gradients; a typed error for a point off the grid.
     fn factors(&self, x: Vector) -> Result<(NodeId, Self::Factors), LocateError>;

@@ -9,7 +9,7 @@
 //! the centre of mass's travel is its 3D distance. Checkpoints (every
 //! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
 //! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume`]
-//! routes a 3D scene here). Not yet in 3D: probes, envelopes, the observed deposit. The plots
+//! routes a 3D scene here). Not yet in 3D: probes and envelopes. The plots
 //! are the energy, the runout and the deposit in plan; `hazard_maps` adds the maps of `maps/`.
 
 use std::ops::ControlFlow;
@@ -653,16 +653,27 @@ impl<'a> SpaceDriver<'a> {
         let deposit = self.plan.as_ref().map(|e| {
             let flow: Vec<mpm_solver3d::Vector> =
                 flowing(scene, p).map(|q| p.position[q]).collect();
-            e.deposit(self.spacing, &flow, |x, z| scene.grid.ground(x, z))
+            let normal = e.deposit(self.spacing, &flow, |x, z| scene.grid.ground(x, z));
+            let vertical = e.deposit(self.spacing, &flow, |x, z| (scene.grid.ground(x, z).0, 1.0));
+            (normal, vertical)
         });
-        if let (Some(e), Some(depth)) = (&self.plan, &deposit) {
-            summary.hazard_maps = Some(e.indicators(depth));
+        if let (Some(e), Some((depth, vertical))) = (&self.plan, &deposit) {
+            summary.hazard_maps = Some(e.indicators(depth, vertical));
+        }
+        if let Some((file, raster)) = &scene.output.observed {
+            // the deposit's vertical depth per plan cell, as an observed DEM difference gives it
+            let g = &scene.grid;
+            let [nx, _, nz] = g.cells();
+            let e = PlanEnvelope::new(g.plan_origin(), g.plan_cell(), [nx, nz]);
+            let flow: Vec<Vector> = flowing(scene, p).map(|q| p.position[q]).collect();
+            let depth = e.deposit(self.spacing, &flow, |x, z| (g.ground(x, z).0, 1.0));
+            summary.observed = e.compare(file, raster, &depth, scene.runout_direction);
         }
         if let Some(dir) = self.dir {
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
-            if let (Some(e), Some(depth)) = (&self.plan, &deposit) {
+            if let (Some(e), Some((depth, _))) = (&self.plan, &deposit) {
                 maps::write(dir, e, depth)?;
             }
             if scene.output.plots {

@@ -386,6 +386,7 @@ vtk = false
 plots = false
 checkpoint_interval = 0.2
 hazard_maps = true
+observed = { deposit = "plane.asc" }
 "#;
     let path = base.join("scene.toml");
     std::fs::write(&path, scene_text).unwrap();
@@ -409,6 +410,12 @@ hazard_maps = true
     }
     let moved = positions.iter().map(|x| x.x).fold(f64::NEG_INFINITY, f64::max);
     assert!(moved > 501.6, "the sand did not flow down the slope: front at {moved}");
+    // (the DEM itself as an "observed depth": positive on every one of the 23 × 11 plan cells,
+    // so every cell is compared and the area overlap is the run's share of the plan)
+    let o = whole.observed.as_ref().unwrap();
+    assert_eq!(o.stations, 23 * 11, "{o:?}");
+    let covered = whole.hazard_maps.unwrap().deposit_area / (0.25 * 0.25);
+    assert!((o.area_iou.unwrap() - covered / 253.0).abs() < 1e-12, "{o:?} {covered}");
     let maps = std::fs::read_to_string(whole_dir.join("maps/max_height.asc")).unwrap();
     assert!(maps.contains("xllcorner 500.125") && maps.contains("yllcorner 800.125"), "{maps}");
     let stopped = mpm_run::run_space_scene(

@@ -67,8 +67,15 @@ pub struct DepositComparison {
     pub max_observed_thickness: f64,
     /// intersection over union of the two deposits' areas in the section (0–1).
     pub iou: f64,
-    /// stations compared (where either deposit lies).
+    /// stations compared (where either deposit lies; in 3D, plan cells).
     pub stations: usize,
+    /// (3D) simulated minus observed lateral spread, the deposit's width across the runout
+    /// direction (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lateral_error: Option<f64>,
+    /// (3D) the deposits' plan areas' intersection over union (0–1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area_iou: Option<f64>,
 }
 
 /// The simulated deposit's vertical thickness at the envelopes' stations (columns of width
@@ -122,6 +129,8 @@ pub fn compare(
         max_observed_thickness: observed.points.iter().map(|p| p[1]).fold(0.0, f64::max),
         iou: if union > 0.0 { inter / union } else { 0.0 },
         stations: n,
+        lateral_error: None,
+        area_iou: None,
     })
 }
 

@@ -21,6 +21,8 @@
 use mpm_solver3d::Vector;
 use serde::{Deserialize, Serialize};
 
+use crate::observed::DepositComparison;
+
 /// One plan cell's maxima over the observations so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlanCell {
@@ -179,18 +181,95 @@ impl PlanEnvelope {
     }
 
     /// The run's plan indicators from the maxima and the final `deposit` depths.
-    pub fn indicators(&self, deposit: &[f64]) -> PlanIndicators {
+    ///
+    /// `vertical` is the same deposit's depth measured vertically (a cosine of 1 in
+    /// [`PlanEnvelope::deposit`]): the volume is Σ vertical depth × plan area, the others from
+    /// `deposit`, measured normal to the ground.
+    pub fn indicators(&self, deposit: &[f64], vertical: &[f64]) -> PlanIndicators {
         let area = self.cell * self.cell;
         let reached = self.cells.iter().filter(|c| c.arrival.is_some()).count();
         let covered = deposit.iter().filter(|d| **d > 0.0).count();
         PlanIndicators {
             affected_area: reached as f64 * area,
             deposit_area: covered as f64 * area,
-            deposit_volume: deposit.iter().sum::<f64>() * area,
+            deposit_volume: vertical.iter().sum::<f64>() * area,
             max_deposit_depth: deposit.iter().copied().fold(0.0, f64::max),
             max_flow_height: self.cells.iter().map(|c| c.max_height).fold(0.0, f64::max),
             max_pressure: self.cells.iter().map(|c| c.max_pressure).fold(0.0, f64::max),
         }
+    }
+}
+
+impl PlanEnvelope {
+    /// the centre (x, z) of plan cell `c` (m).
+    pub fn centre(&self, c: usize) -> (f64, f64) {
+        let (col, row) = (c % self.cols, c / self.cols);
+        (self.x0 + (col as f64 + 0.5) * self.cell, self.z0 + (row as f64 + 0.5) * self.cell)
+    }
+
+    /// Compares the simulated deposit `simulated` (a depth per plan cell, vertical, as
+    /// [`PlanEnvelope::deposit`] gives it with a cosine of 1) with the `observed` one (a
+    /// raster of vertical depths in map coordinates, map y = −z, sampled bilinearly at each
+    /// cell's centre; 0 off the raster or on a hole), along the unit plan `direction` of the
+    /// runout: over the cells where either deposit lies, the RMS depth error, the overlap
+    /// Σ min / Σ max (as in 2D), the plan areas' intersection over union, and the errors of
+    /// the front and tail (the farthest and nearest deposit cells' centres along `direction`)
+    /// and of the lateral spread (the deposit's width across it). `None` when the
+    /// observation holds no deposit on the plan.
+    pub fn compare(
+        &self,
+        file: &str,
+        observed: &mpm_dem::Raster,
+        simulated: &[f64],
+        direction: Vector,
+    ) -> Option<DepositComparison> {
+        let across = Vector::new(-direction.z, 0.0, direction.x);
+        let obs: Vec<f64> = (0..self.cells.len())
+            .map(|c| {
+                let (x, z) = self.centre(c);
+                observed.height(x, -z).map_or(0.0, |h| if h.is_finite() { h.max(0.0) } else { 0.0 })
+            })
+            .collect();
+        // (tail, front, lateral min, lateral max) over the cells with a positive depth.
+        let extent = |depth: &[f64]| -> Option<[f64; 4]> {
+            let mut e = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+            let mut any = false;
+            for (c, _) in depth.iter().enumerate().filter(|(_, h)| **h > 0.0) {
+                let (x, z) = self.centre(c);
+                let p = Vector::new(x, 0.0, z);
+                let (s, t) = (p.dot(direction), p.dot(across));
+                e = [e[0].min(s), e[1].max(s), e[2].min(t), e[3].max(t)];
+                any = true;
+            }
+            any.then_some(e)
+        };
+        let o = extent(&obs)?;
+        let m = extent(simulated).unwrap_or([o[0], o[0], o[2], o[2]]);
+        let (mut sq, mut inter, mut union, mut n) = (0.0, 0.0, 0.0, 0usize);
+        let (mut both, mut either) = (0usize, 0usize);
+        for (&h_sim, &h_obs) in simulated.iter().zip(&obs) {
+            if h_sim > 0.0 || h_obs > 0.0 {
+                sq += (h_sim - h_obs).powi(2);
+                inter += h_sim.min(h_obs);
+                union += h_sim.max(h_obs);
+                n += 1;
+                either += 1;
+                both += usize::from(h_sim > 0.0 && h_obs > 0.0);
+            }
+        }
+        Some(DepositComparison {
+            file: file.to_string(),
+            observed_tail_x: o[0],
+            observed_front_x: o[1],
+            front_error: m[1] - o[1],
+            tail_error: m[0] - o[0],
+            rms_thickness_error: if n > 0 { (sq / n as f64).sqrt() } else { 0.0 },
+            max_observed_thickness: obs.iter().copied().fold(0.0, f64::max),
+            iou: if union > 0.0 { inter / union } else { 0.0 },
+            stations: n,
+            lateral_error: Some((m[3] - m[2]) - (o[3] - o[2])),
+            area_iou: Some(if either > 0 { both as f64 / either as f64 } else { 0.0 }),
+        })
     }
 }
 
@@ -266,7 +345,7 @@ mod tests {
         }
         let end: Vec<Vector> = start.iter().map(|p| *p + 2.0 * v).collect();
         let depth = e.deposit(s, &end, |_, _| (0.0, 1.0));
-        let ind = e.indicators(&depth);
+        let ind = e.indicators(&depth, &depth);
         // the block's footprint 1 m × 0.5 m, 0.3 m deep
         assert!((ind.deposit_area - 0.5).abs() < 1e-9 && (ind.deposit_volume - 0.15).abs() < 1e-9);
         assert!((ind.max_deposit_depth - 0.3).abs() < 1e-12);
@@ -313,5 +392,40 @@ mod tests {
             }
         }
         assert_eq!(seen, 22 * 5);
+    }
+
+    /// A simulated deposit 0.5 m deep over plan cells x ∈ [2, 6), z ∈ [1, 3) against an
+    /// observed one 0.5 m deep over x ∈ [4, 8), z ∈ [1, 4) (a raster of 1 m cells on the same
+    /// lattice, map y = −z): they share 2 × 2 of 4 × 2 + 4 × 3 − 4 = 16 cells (area IoU 1/4,
+    /// Σ min / Σ max the same), differ by 0.5 m on the 12 others (RMS 0.5 √(12/16)); along +x
+    /// the run stops 2 m short at both ends, and it is 1 m narrower.
+    #[test]
+    fn a_shifted_deposit_in_plan_gives_its_exact_overlap_and_errors() {
+        let e = PlanEnvelope::new([0.0, 0.0], 1.0, [10, 5]);
+        let mut sim = vec![0.0; 50];
+        for row in 1..3 {
+            for col in 2..6 {
+                sim[row * 10 + col] = 0.5;
+            }
+        }
+        // the raster: 10 × 5 cells of 1 m, north-west corner at map (0, 0) (z = 0)
+        let mut z = vec![0.0; 50];
+        for row in 1..4 {
+            for col in 4..8 {
+                z[row * 10 + col] = 0.5;
+            }
+        }
+        let raster = mpm_dem::Raster::new("o.asc", [10, 5], 1.0, [0.0, 0.0], z, None).unwrap();
+        let c = e.compare("o.asc", &raster, &sim, Vector::X).unwrap();
+        assert_eq!(c.stations, 16);
+        assert!((c.area_iou.unwrap() - 0.25).abs() < 1e-12, "{c:?}");
+        assert!((c.iou - 0.25).abs() < 1e-12, "{c:?}");
+        assert!((c.rms_thickness_error - 0.5 * (12.0f64 / 16.0).sqrt()).abs() < 1e-12, "{c:?}");
+        assert!((c.front_error + 2.0).abs() < 1e-12 && (c.tail_error + 2.0).abs() < 1e-12);
+        assert!((c.lateral_error.unwrap() + 1.0).abs() < 1e-12, "{c:?}");
+        // the observation itself: all agree
+        let same: Vec<f64> = (0..50).map(|k| raster.heights()[k]).collect();
+        let c = e.compare("o.asc", &raster, &same, Vector::X).unwrap();
+        assert_eq!((c.area_iou, c.iou, c.rms_thickness_error), (Some(1.0), 1.0, 0.0));
     }
 }

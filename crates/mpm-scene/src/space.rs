@@ -148,6 +148,9 @@ pub struct SpaceOutput {
     /// whether hazard maps are observed every step and written at the end
     /// ([`crate::plan::PlanEnvelope`]).
     pub hazard_maps: bool,
+    /// an observed deposit to compare the run's with (`[output] observed = { deposit =
+    /// "depth.asc" }`): the file as the scene names it and its raster of vertical depths.
+    pub observed: Option<(String, mpm_dem::Raster)>,
 }
 
 /// One 3D material point before the constitutive state is attached.

@@ -420,7 +420,9 @@ fn terrain_grid(
                 for i in 0..=nx {
                     let (x, y) = node_map(i, k);
                     if generate::inside_polygon(&vertices, DVec2::new(x, y)) {
-                        heights[k * (nx + 1) + i] -= depth;
+                        // `depth` below the DEM, wherever a rupture raster cut too
+                        let at = k * (nx + 1) + i;
+                        heights[at] = heights[at].min(surface[at] - depth);
                         inside += 1;
                     }
                 }
@@ -663,6 +665,8 @@ fn seeds(
     let mut seeds: Vec<SpaceSeed> = Vec::new();
     let mut shapes: Vec<Shape> = Vec::new();
     let mut gimp_ppc = 1;
+    // the release body, once one is met
+    let mut release: Option<usize> = None;
     for (b, body) in f.bodies.iter().enumerate() {
         let base = format!("bodies[{b}]");
         let ppc = body.particles_per_cell.unwrap_or(2);
@@ -677,6 +681,16 @@ fn seeds(
         gimp_ppc = gimp_ppc.max(ppc as usize);
         let spacing = cell / ppc as f64;
         let (fill, shape) = if body.shape == SpaceShapeKind::Release {
+            if let Some(k) = release {
+                return Err(ctx.err(
+                    &format!("{base}.shape"),
+                    Some("\"release\"".into()),
+                    format!("bodies[{k}] already fills the release volume"),
+                    "one release body",
+                    "remove one of the two",
+                ));
+            }
+            release = Some(b);
             let fill = release_body(ctx, &base, body, (grid, surface), spacing, seeds.len())?;
             (fill, None)
         } else {
@@ -690,6 +704,25 @@ fn seeds(
             if let SpaceGrid::Terrain(t) = grid {
                 // over a DEM a body is the part of its shape above the ground
                 fill.retain(|s| s.position.y > t.ground_height(s.position.x, s.position.z));
+                // and none of it may lie in the release volume a release body fills
+                if let (Some(k), Some(top)) = (release, surface) {
+                    let cut = |p: Vector| {
+                        let (g, s) = (t.ground_height(p.x, p.z), top.ground_height(p.x, p.z));
+                        s - g > 0.0 && p.y < s
+                    };
+                    if let Some(q) = fill.iter().find(|q| cut(q.position)) {
+                        return Err(ctx.err(
+                            &base,
+                            None,
+                            format!(
+                                "it overlaps bodies[{k}], the release volume (a particle at {})",
+                                q.position
+                            ),
+                            "bodies that do not overlap",
+                            "move or shrink this body",
+                        ));
+                    }
+                }
             }
             (fill, Some(shape))
         };
@@ -779,18 +812,21 @@ fn release_body(
             "cut the release into the DEM in `[grid]`, or give the body a shape",
         ));
     };
+    // about the particles it will make: each cut lattice node stands for (h/s)² columns of
+    // depth/s + 1 particles at most
     let [nx, nz] = t.plan_cells();
-    let mut deepest: f64 = 0.0;
+    let h = t.spacing()[0];
+    let mut estimate = 0.0;
     for k in 0..=nz as i32 {
         for i in 0..=nx as i32 {
             let node = mpm_grid3d::NodeId::new(i, 0, k);
-            deepest = deepest.max(surface.node_position(node).y - t.node_position(node).y);
+            let depth = surface.node_position(node).y - t.node_position(node).y;
+            if depth > 0.0 {
+                estimate += (h / spacing).powi(2) * (depth / spacing + 1.0);
+            }
         }
     }
-    let h = t.spacing()[0];
-    let estimate =
-        (nx as f64 * h / spacing) * (nz as f64 * h / spacing) * (deepest / spacing + 1.0);
-    if !(estimate.is_finite() && already as f64 + estimate <= 4.0 * MAX_PARTICLES as f64) {
+    if !(estimate.is_finite() && already as f64 + estimate <= 2.0 * MAX_PARTICLES as f64) {
         return Err(bodies::too_many(ctx, base));
     }
     let fill: Vec<generate::Seed> = release_fill(t, surface, spacing)
@@ -994,7 +1030,6 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
         ("output.probes", o.probes.is_some()),
         ("output.reference", o.reference.is_some()),
         ("output.envelope", o.envelope == Some(true)),
-        ("output.observed", o.observed.is_some()),
     ];
     if let Some((path, _)) = refused.iter().find(|(_, here)| *here) {
         return Err(ctx.err(
@@ -1002,7 +1037,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             None,
             "this output is not available in 3D scenes yet",
             "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots, \
-             runout_direction, hazard_maps",
+             runout_direction, hazard_maps, observed",
             "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
              summary.json)",
         ));
@@ -1049,7 +1084,20 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             "coarsen the grid in plan or shrink it to the area the flow can reach",
         ));
     }
+    // an observed deposit: a raster of vertical depths (m) in map coordinates
+    let observed = match &o.observed {
+        None => None,
+        Some(spec) => {
+            let raster = mpm_dem::Raster::read_within(
+                &super::polyline::file_path(ctx, &spec.deposit),
+                crate::limits::available_memory(),
+            )
+            .map_err(|e| super::polyline::dem_error(ctx, "output.observed.deposit", e))?;
+            Some((spec.deposit.clone(), raster))
+        }
+    };
     Ok(SpaceOutput {
+        observed,
         interval,
         series_interval,
         vtk: o.vtk.unwrap_or(true),
@@ -1316,9 +1364,9 @@ end_time = 0.1
             let p = seed.position;
             assert!(p.y > t.ground_height(p.x, p.z), "{p}");
         }
-        // the box from y = 9 m: its part above the plane (which is 9.75 to 9.5 m under it)
-        let below = s.seeds.iter().filter(|q| q.position.y < 9.5).count();
-        assert_eq!(below, 0);
+        // the box from y = 9 m: its part above the plane (9.75 to 9.5 m under it), cut
+        let lowest = s.seeds.iter().map(|q| q.position.y).fold(f64::INFINITY, f64::min);
+        assert!(lowest > 9.5 && lowest < 9.6, "{lowest}");
         // without a directory the DEM is not found: the error names the field
         assert!(error(&text).contains("grid.dem"), "{}", error(&text));
         let e = load_space_str_in(&terrain_scene(&dir, "cells = [1, 1, 1]", 9.0), "t.toml", &dir)
@@ -1397,6 +1445,24 @@ end_time = 0.1
         .unwrap_err()
         .to_string();
         assert!(e.contains("bodies[0].radius"), "{e}");
+        // the polygon and the rupture together: the polygon's 0.3 m is below the DEM, not below
+        // the rupture (whose 0.2 m it contains): 0.3 m over its 80 nodes, 0.2 m over the
+        // rupture's 20 others
+        let both = with_rupture.replace("layers = 12\n", &format!("layers = 12\n{cut}\n"));
+        let s = load_space_str_in(&both, "t.toml", &dir).unwrap();
+        let volume: f64 = s.seeds.iter().map(|q| q.volume).sum();
+        let expected = (0.3 * 80.0 + 0.2 * 20.0) * 0.01;
+        assert!((volume - expected).abs() < 1e-9 * expected, "{volume} vs {expected}");
+        // a second release body, and a box in the release volume after it, are refused
+        let twice = format!("{both}\n[[bodies]]\nmaterial = \"sand\"\nshape = \"release\"\n");
+        let e = load_space_str_in(&twice, "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("bodies[1].shape") && e.contains("already"), "{e}");
+        let boxed = format!(
+            "{both}\n[[bodies]]\nmaterial = \"sand\"\nshape = \"box\"\n\
+             min = [100.9, 9.0, -201.2]\nmax = [101.1, 9.9, -201.0]\n"
+        );
+        let e = load_space_str_in(&boxed, "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("bodies[1]") && e.contains("release volume"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -266,11 +266,15 @@ fn wall_reach<S: ShapeFunctions<N>, const N: usize>(
 ) -> f64 {
     let mut diagonal: f64 = 0.0;
     for &node in active.nodes() {
-        for dj in [-1, 1] {
-            #[cfg(not(feature = "dim3"))]
-            let corner = node.offset([1, dj]);
-            #[cfg(feature = "dim3")]
-            let corner = node.offset([1, dj, 1]);
+        // (in 3D both diagonals across z: on a terrain grid whose ground falls along x and
+        // rises along z, the (1, ±1, −1) one is the longer)
+        #[cfg(not(feature = "dim3"))]
+        let corners = [node.offset([1, -1]), node.offset([1, 1])];
+        #[cfg(feature = "dim3")]
+        let corners = [-1, 1].map(|dk| [-1, 1].map(|dj| node.offset([1, dj, dk])));
+        #[cfg(feature = "dim3")]
+        let corners = corners.as_flattened();
+        for &corner in corners.iter() {
             if active.index_of(corner).is_some() {
                 let d = shape.node_position(corner) - shape.node_position(node);
                 diagonal = diagonal.max(d.length());

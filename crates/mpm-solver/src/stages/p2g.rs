@@ -253,11 +253,12 @@ fn scatter<
             };
             let (c_q, x0) =
                 if APIC { (affine[q], position[q] - dt_back * v) } else { Default::default() };
-            // In 3D (a regular grid) x_i − x_p separates by axis, so C (x_i − x_p) is
+            // In 3D on a regular grid x_i − x_p separates by axis, so C (x_i − x_p) is
             // the sum of one column term per axis, C_:a (x_i − x_p)_a, for the w nodes
-            // along each axis: 3w products per particle instead of 9 per node.
+            // along each axis: 3w products per particle instead of 9 per node. (Not on a
+            // terrain grid, whose node heights depend on their column.)
             #[cfg(feature = "dim3")]
-            let affine_terms: [[Vector; 3]; DIM] = if APIC {
+            let affine_terms: [[Vector; 3]; DIM] = if APIC && S::SEPARABLE_NODES {
                 std::array::from_fn(|a| {
                     std::array::from_fn(|t| {
                         let node = place[at + t.min(w - 1) * stride[a]];
@@ -273,9 +274,11 @@ fn scatter<
                 #[cfg(not(feature = "dim3"))]
                 let momentum = if APIC { mw * (v + c_q * (place[c] - x0)) } else { mw * v };
                 #[cfg(feature = "dim3")]
-                let momentum = if APIC {
+                let momentum = if APIC && S::SEPARABLE_NODES {
                     let [tx, ty, tz] = slots[k];
                     mw * (v + (affine_terms[0][tx] + affine_terms[1][ty] + affine_terms[2][tz]))
+                } else if APIC {
+                    mw * (v + c_q * (place[c] - x0))
                 } else {
                     mw * v
                 };
