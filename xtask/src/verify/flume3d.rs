@@ -10,9 +10,7 @@
 use std::fmt::Write as _;
 
 use super::Rows;
-
-/// the bar.
-const EQUIVALENCE_REL: f64 = 0.01;
+use super::three_d::{EQUIVALENCE_REL, equivalence_rows};
 
 /// the flume's ground: 30° over 2.5 m, then level to 5 m.
 fn ground(x: f64) -> f64 {
@@ -190,32 +188,5 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
         "reported: 4 grains across per section grain close the gaps",
         format!("{:.4}", rb.front_x),
     );
-    rows.rel(
-        &case,
-        "centre-of-mass travel (m)",
-        ra.com_travel,
-        "the 2D flume",
-        rb.com_travel,
-        EQUIVALENCE_REL,
-    );
-    let (ea, eb) = (&a.energy, &b.energy);
-    let dissipated = |e: &mpm_solver::EnergyLedger| {
-        e.plastic_dissipation + e.friction_work + e.constraint_work + e.transfer_dissipation
-    };
-    rows.rel(
-        &case,
-        "potential energy at the end (J/m)",
-        ea.potential,
-        "the 2D flume",
-        eb.potential / width,
-        EQUIVALENCE_REL,
-    );
-    rows.rel(
-        &case,
-        "energy dissipated (J/m)",
-        dissipated(ea),
-        "the 2D flume",
-        dissipated(eb) / width,
-        EQUIVALENCE_REL,
-    );
+    equivalence_rows(rows, &case, "the 2D flume", (&a, &b), width);
 }

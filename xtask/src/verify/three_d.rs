@@ -95,24 +95,7 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
     );
     match slope(&n) {
         Ok(p) => {
-            for &(t, [along, across], [rigid, _]) in &p.samples {
-                rows.rel(
-                    &case,
-                    &format!("travel along the fall line at {t} s"),
-                    rigid,
-                    "eq 22",
-                    along,
-                    PATH_REL,
-                );
-                rows.at_most(
-                    (&case, &format!("|travel across| / travel at {t} s")),
-                    "0",
-                    "eq 22 (no drift)",
-                    across.abs() / rigid,
-                    DRIFT_REL,
-                    true,
-                );
-            }
+            fall_line_rows(rows, &case, &p.samples);
         }
         Err(e) => rows.failed(&case, "run", &e),
     }
@@ -195,6 +178,29 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
     terrain(rows);
 }
 
+/// eq 22's rows of a block sliding from rest down a fall line: at each sample (t, simulated
+/// (along, across), rigid (along, _)), the travel along it and the drift across it.
+fn fall_line_rows(rows: &mut Rows, case: &str, samples: &[(f64, [f64; 2], [f64; 2])]) {
+    for &(t, [along, across], [rigid, _]) in samples {
+        rows.rel(
+            case,
+            &format!("travel along the fall line at {t} s"),
+            rigid,
+            "eq 22",
+            along,
+            PATH_REL,
+        );
+        rows.at_most(
+            (case, &format!("|travel across| / travel at {t} s")),
+            "0",
+            "eq 22 (no drift)",
+            across.abs() / rigid,
+            DRIFT_REL,
+            true,
+        );
+    }
+}
+
 /// The terrain-following grid over a DEM (`mpm_tests::terrain3d`): eq 22 on a DEM of an
 /// oblique plane, a flat DEM against the regular grid, no particle below a DEM of many slopes.
 fn terrain(rows: &mut Rows) {
@@ -205,24 +211,7 @@ fn terrain(rows: &mut Rows) {
     );
     match dem_slope(0.25) {
         Ok(r) => {
-            for &(t, [along, across], [rigid, _]) in &r.samples {
-                rows.rel(
-                    &case,
-                    &format!("travel along the fall line at {t} s"),
-                    rigid,
-                    "eq 22",
-                    along,
-                    PATH_REL,
-                );
-                rows.at_most(
-                    (&case, &format!("|travel across| / travel at {t} s")),
-                    "0",
-                    "eq 22 (no drift)",
-                    across.abs() / rigid,
-                    DRIFT_REL,
-                    true,
-                );
-            }
+            fall_line_rows(rows, &case, &r.samples);
             rows.at_least(
                 (&case, "lowest particle centre above the DEM (m)"),
                 "> 0",
@@ -408,7 +397,7 @@ plots = false
 "#;
 
 /// The issue's bar for the plane-strain equivalence (front, centre-of-mass travel, ledger).
-const EQUIVALENCE_REL: f64 = 0.01;
+pub(super) const EQUIVALENCE_REL: f64 = 0.01;
 
 /// Plane-strain equivalence: a Drucker-Prager column collapse (0.2 × 0.4 m, φ 30°, on a 25°
 /// floor, USAVG FLIP bilinear, 0.02 m cells) in 2D and extruded between frictionless walls in
@@ -447,11 +436,24 @@ fn plane_strain(rows: &mut Rows) {
     };
     let (ra, rb) = (&a.runout.last, &b.runout.last);
     rows.rel(&case, "front (m)", ra.front_x, "the 2D run", rb.front_x, EQUIVALENCE_REL);
+    equivalence_rows(rows, &case, "the 2D run", (&a, &b), width);
+}
+
+/// The rows a 2D run `a` and its 3D extrusion `b`, `width` m thick, share: the centre of mass's
+/// travel and the potential and dissipated energies per metre, within [`EQUIVALENCE_REL`].
+pub(super) fn equivalence_rows(
+    rows: &mut Rows,
+    case: &str,
+    source: &str,
+    (a, b): (&mpm_scene::RunSummary, &mpm_scene::RunSummary),
+    width: f64,
+) {
+    let (ra, rb) = (&a.runout.last, &b.runout.last);
     rows.rel(
-        &case,
+        case,
         "centre-of-mass travel (m)",
         ra.com_travel,
-        "the 2D run",
+        source,
         rb.com_travel,
         EQUIVALENCE_REL,
     );
@@ -460,18 +462,18 @@ fn plane_strain(rows: &mut Rows) {
         e.plastic_dissipation + e.friction_work + e.constraint_work + e.transfer_dissipation
     };
     rows.rel(
-        &case,
+        case,
         "potential energy (J/m)",
         ea.potential,
-        "the 2D run",
+        source,
         eb.potential / width,
         EQUIVALENCE_REL,
     );
     rows.rel(
-        &case,
+        case,
         "energy dissipated (J/m)",
         dissipated(ea),
-        "the 2D run",
+        source,
         dissipated(eb) / width,
         EQUIVALENCE_REL,
     );
