@@ -240,6 +240,10 @@ pub struct Obstacle {
     pub momentum_end: Vector,
     /// the impulse the wall gave the block over the run.
     pub wall_impulse: Vector,
+    /// the declared wall's entry of the boundary loads (`Solver::boundary_loads`).
+    pub wall_load: mpm_solver::BoundaryLoad,
+    /// the largest |impulse| any other boundary's entry records (no other boundary: 0).
+    pub other_loads: f64,
     /// largest |p(t) − p(0) − J(t)| / |p(0)| over the run: momentum balance with the wall's
     /// impulse J (no gravity, no other boundary).
     pub balance: f64,
@@ -316,6 +320,11 @@ impl ShapeJob for ObstacleJob {
         let p = s.particles();
         r.momentum_end = p.momentum();
         r.wall_impulse = s.boundary_impulse();
+        r.wall_load = s.boundary_loads()[mpm_solver::SIDES];
+        r.other_loads = s.boundary_loads()[..mpm_solver::SIDES]
+            .iter()
+            .map(|l| l.impulse.length())
+            .fold(0.0, f64::max);
         let change = r.momentum_end - p0;
         r.tangential_change = change.dot(t) / p0.length();
         r.normal_change = change.dot(n) / p0.length();

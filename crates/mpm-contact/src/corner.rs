@@ -29,7 +29,7 @@
 //! Friction on the boundary the node ends on uses that boundary's normal impulse only.
 
 use crate::node_law::{ContactOutcome, Face, Law, valid_dt, validate_step, work_mass};
-use crate::{Boundary, ContactError, Friction, Vector};
+use crate::{Boundary, Carriers, ContactError, Friction, Vector};
 
 /// Relative slack, times |v\*|, allowed on v^L·n_k ≥ 0 when checking a candidate against the other
 /// boundaries.
@@ -43,11 +43,11 @@ pub const FEASIBILITY_TOLERANCE: f64 = 1e-12;
 enum Verdict {
     /// no boundary is pressed.
     Free,
-    /// the node ends on this boundary's candidate.
-    On(Face),
-    /// (3D) the node ends on the edge where two boundaries meet.
+    /// the node ends on the candidate of this boundary (its index).
+    On(usize, Face),
+    /// (3D) the node ends on the edge where two boundaries meet (their indices).
     #[cfg(feature = "dim3")]
-    Edge(Edge),
+    Edge(Edge, usize, usize),
     /// the node is pinned in a corner.
     Stop,
 }
@@ -126,18 +126,24 @@ impl Edge {
                 * mass
                 * (trial.length_squared() - self.along_trial * self.along_trial).max(0.0),
             impulse: mass * (self.end - trial),
+            carriers: crate::Carriers::None,
         }
     }
 }
 
 /// (3D) the first admissible edge of two pressed boundaries, pairs in slice order.
 #[cfg(feature = "dim3")]
-fn edge(boundaries: &[Boundary], trial: Vector, law: Law, slack: f64) -> Option<Edge> {
+fn edge(
+    boundaries: &[Boundary],
+    trial: Vector,
+    law: Law,
+    slack: f64,
+) -> Option<(Edge, usize, usize)> {
     for (i, a) in boundaries.iter().enumerate() {
-        for b in &boundaries[i + 1..] {
+        for (j, b) in boundaries.iter().enumerate().skip(i + 1) {
             let Some(edge) = Edge::resolve(a, b, trial, law) else { continue };
             if boundaries.iter().all(|k| edge.end.dot(k.normal()) >= -slack) {
-                return Some(edge);
+                return Some((edge, i, j));
             }
         }
     }
@@ -172,8 +178,8 @@ fn next_pressed(
 
 /// the treatment of the module documentation, in the velocity domain.
 fn resolve_all(boundaries: &[Boundary], trial: Vector, law: Law) -> Verdict {
-    if let Some(b) = boundaries.iter().find(|b| matches!(b.friction(), Friction::Fixed)) {
-        return Verdict::On(Face::resolve(b, trial, law));
+    if let Some(k) = boundaries.iter().position(|b| matches!(b.friction(), Friction::Fixed)) {
+        return Verdict::On(k, Face::resolve(&boundaries[k], trial, law));
     }
     let slack = FEASIBILITY_TOLERANCE * trial.length();
     let mut last = None;
@@ -182,15 +188,15 @@ fn resolve_all(boundaries: &[Boundary], trial: Vector, law: Law) -> Verdict {
         let face = Face::resolve(&boundaries[key.1], trial, law);
         let end = face.end_velocity();
         if boundaries.iter().all(|b| end.dot(b.normal()) >= -slack) {
-            return Verdict::On(face);
+            return Verdict::On(key.1, face);
         }
     }
     if last.is_none() {
         return Verdict::Free;
     }
     #[cfg(feature = "dim3")]
-    if let Some(edge) = edge(boundaries, trial, law, slack) {
-        return Verdict::Edge(edge);
+    if let Some((edge, i, j)) = edge(boundaries, trial, law, slack) {
+        return Verdict::Edge(edge, i, j);
     }
     Verdict::Stop
 }
@@ -205,9 +211,15 @@ fn step_all(
 ) -> ContactOutcome {
     match resolve_all(boundaries, velocity + acceleration * dt, Law::Step) {
         Verdict::Free => ContactOutcome::untouched(velocity, acceleration, dt),
-        Verdict::On(face) => face.outcome(mass, velocity, acceleration, dt),
+        Verdict::On(k, face) => ContactOutcome {
+            carriers: Carriers::One(k),
+            ..face.outcome(mass, velocity, acceleration, dt)
+        },
         #[cfg(feature = "dim3")]
-        Verdict::Edge(edge) => edge.outcome(mass, velocity, acceleration, dt),
+        Verdict::Edge(edge, i, j) => ContactOutcome {
+            carriers: Carriers::Two(i, j),
+            ..edge.outcome(mass, velocity, acceleration, dt)
+        },
         Verdict::Stop => ContactOutcome::stopped(mass, velocity, acceleration, dt),
     }
 }
@@ -250,14 +262,253 @@ pub fn try_apply_all(
     Ok(step_all(boundaries, mass, velocity, acceleration, dt))
 }
 
+/// Each boundary's share of the impulse `outcome` (from [`apply_all`] on `boundaries` with trial
+/// velocity `trial` = v + a Δt) gave the node, written to `shares[k]` for boundary k (the others
+/// 0): what a solver adds up per wall to report the load each one takes. The shares sum to
+/// `outcome.impulse` (the last carrier takes the rounding).
+///
+/// - One carrier: it takes the whole impulse.
+/// - (3D) An edge of boundaries i and j: the impulse J = α n_i + β n_j + γ e, with e along the
+///   edge, is split as the law made it: α n_i and β n_j are the two normal pushes, and the friction
+///   γ e is divided in proportion to the friction each push carries, μ_i α : μ_j β (in proportion
+///   to α : β where a boundary is rough or fixed).
+/// - Pinned in a corner: J = −m v\* is the sum of pushes along the pressed boundaries' normals,
+///   taken most pressed first as long as each normal adds a new direction (nearly parallel planes,
+///   such as the two sides of a gentle kink, leave the later one without a share); with two
+///   independent normals in 2D, or three in 3D, the decomposition is exact.
+///
+/// `shares` must be at least as long as `boundaries`; only its first `boundaries.len()` entries are
+/// written.
+pub fn impulse_shares(
+    boundaries: &[Boundary],
+    outcome: &ContactOutcome,
+    trial: Vector,
+    shares: &mut [Vector],
+) {
+    let shares = &mut shares[..boundaries.len()];
+    shares.fill(Vector::ZERO);
+    let impulse = outcome.impulse;
+    match outcome.carriers {
+        Carriers::None => {}
+        Carriers::One(k) => shares[k] = impulse,
+        Carriers::Two(i, j) => {
+            let (ni, nj) = (boundaries[i].normal(), boundaries[j].normal());
+            // the part along the edge (3D; in 2D two independent normals span everything)
+            #[cfg(feature = "dim3")]
+            let along = ni.cross(nj).try_normalize().map_or(Vector::ZERO, |e| impulse.dot(e) * e);
+            #[cfg(not(feature = "dim3"))]
+            let along = Vector::ZERO;
+            let normal = impulse - along;
+            let c = ni.dot(nj);
+            let det = 1.0 - c * c;
+            let (a, b) = if det > 1e-12 {
+                let (pi, pj) = (normal.dot(ni), normal.dot(nj));
+                ((pi - c * pj) / det, (pj - c * pi) / det)
+            } else {
+                (normal.dot(ni), 0.0)
+            };
+            let mu = |k: usize| match boundaries[k].friction() {
+                Friction::Coulomb { mu } => mu,
+                Friction::Rough | Friction::Fixed => f64::INFINITY,
+            };
+            let (mi, mj) = (mu(i), mu(j));
+            let weight = if mi.is_infinite() || mj.is_infinite() {
+                let w = |m: f64, l: f64| if m.is_infinite() { l.max(0.0) } else { 0.0 };
+                (w(mi, a), w(mj, b))
+            } else {
+                ((mi * a).max(0.0), (mj * b).max(0.0))
+            };
+            let total = weight.0 + weight.1;
+            let first = if total > 0.0 { weight.0 / total } else { 1.0 };
+            shares[i] = a * ni + first * along;
+            shares[j] = impulse - shares[i];
+        }
+        Carriers::Corner => {
+            // the pressed normals, most pressed first, kept while independent
+            let mut order: [(f64, usize); 8] = [(0.0, 0); 8];
+            let mut count = 0;
+            for (k, b) in boundaries.iter().enumerate() {
+                let vn = trial.dot(b.normal());
+                if vn < 0.0 && count < order.len() {
+                    order[count] = (vn, k);
+                    count += 1;
+                }
+            }
+            order[..count].sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            const DIM: usize = if cfg!(feature = "dim3") { 3 } else { 2 };
+            let mut basis: [Vector; DIM] = [Vector::ZERO; DIM];
+            let mut chosen: [usize; DIM] = [0; DIM];
+            let mut rank = 0;
+            for &(_, k) in &order[..count] {
+                if rank == DIM {
+                    break;
+                }
+                let n = boundaries[k].normal();
+                let mut q = n;
+                for b in &basis[..rank] {
+                    q -= q.dot(*b) * *b;
+                }
+                if let Some(q) = q.try_normalize().filter(|_| q.length() > 1e-6) {
+                    basis[rank] = q;
+                    chosen[rank] = k;
+                    rank += 1;
+                }
+            }
+            if rank == 0 {
+                return;
+            }
+            // J = Σ λ_r n_r over the chosen normals: the Gram system, solved by elimination
+            let mut g = [[0.0; 4]; DIM];
+            for r in 0..rank {
+                let nr = boundaries[chosen[r]].normal();
+                for (c, &k) in chosen[..rank].iter().enumerate() {
+                    g[r][c] = nr.dot(boundaries[k].normal());
+                }
+                g[r][3] = impulse.dot(nr);
+            }
+            let lambda = solve_small(&mut g, rank);
+            let last = chosen[rank - 1];
+            let mut rest = impulse;
+            for r in 0..rank - 1 {
+                let k = chosen[r];
+                shares[k] = lambda[r] * boundaries[k].normal();
+                rest -= shares[k];
+            }
+            shares[last] = rest;
+        }
+    }
+}
+
+/// the solution of the `n`×`n` system whose augmented rows (right-hand side in column 3) are
+/// `g`, by Gaussian elimination with partial pivoting; a zero pivot gives that unknown 0.
+fn solve_small<const D: usize>(g: &mut [[f64; 4]; D], n: usize) -> [f64; D] {
+    for col in 0..n {
+        let pivot = (col..n).max_by(|&a, &b| g[a][col].abs().total_cmp(&g[b][col].abs()));
+        let pivot = pivot.unwrap_or(col);
+        g.swap(col, pivot);
+        if g[col][col] == 0.0 {
+            continue;
+        }
+        let pivot_row = g[col];
+        for row in &mut g[col + 1..n] {
+            let f = row[col] / pivot_row[col];
+            for (a, b) in row.iter_mut().zip(pivot_row).skip(col) {
+                *a -= f * b;
+            }
+        }
+    }
+    let mut x = [0.0; D];
+    for row in (0..n).rev() {
+        let mut v = g[row][3];
+        for c in row + 1..n {
+            v -= g[row][c] * x[c];
+        }
+        x[row] = if g[row][row] == 0.0 { 0.0 } else { v / g[row][row] };
+    }
+    x
+}
+
 /// [`Boundary::constrain_velocity`] for a node on any number of boundaries: the same corner treatment
 /// with every Coulomb boundary acting as a roller. A node pinned in a corner gets zero velocity.
 pub fn constrain_velocity_all(boundaries: &[Boundary], velocity: Vector) -> Vector {
     match resolve_all(boundaries, velocity, Law::VelocityOnly) {
         Verdict::Free => velocity,
-        Verdict::On(face) => face.end_velocity(),
+        Verdict::On(_, face) => face.end_velocity(),
         #[cfg(feature = "dim3")]
-        Verdict::Edge(edge) => edge.end,
+        Verdict::Edge(edge, ..) => edge.end,
         Verdict::Stop => Vector::ZERO,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn coulomb(mu: f64) -> Friction {
+        Friction::Coulomb { mu }
+    }
+
+    /// a node pushed into the corner of a wall (n = x) and the ground (n = y): the pinned node's
+    /// impulse −m v* splits exactly into the wall's push along x and the ground's along y.
+    #[cfg(not(feature = "dim3"))]
+    #[test]
+    fn a_pinned_corner_node_splits_its_impulse_along_the_two_normals() {
+        let wall = Boundary::new(Vector::X, coulomb(0.3)).unwrap();
+        let ground = Boundary::new(Vector::Y, coulomb(0.3)).unwrap();
+        let planes = [ground, wall];
+        let (m, v, a, dt) = (2.0, Vector::new(-1.0, -2.0), Vector::ZERO, 1e-3);
+        let out = apply_all(&planes, m, v, a, dt);
+        assert_eq!(out.carriers, Carriers::Corner);
+        let mut shares = [Vector::ZERO; 2];
+        impulse_shares(&planes, &out, v + a * dt, &mut shares);
+        assert!((shares[0] - Vector::new(0.0, 4.0)).length() < 1e-15, "{shares:?}");
+        assert!((shares[1] - Vector::new(2.0, 0.0)).length() < 1e-15, "{shares:?}");
+        // sliding along the ground away from the wall: the ground carries it all
+        let v = Vector::new(1.0, -2.0);
+        let out = apply_all(&planes, m, v, a, dt);
+        assert_eq!(out.carriers, Carriers::One(0));
+        impulse_shares(&planes, &out, v, &mut shares);
+        assert_eq!(shares, [out.impulse, Vector::ZERO]);
+        // moving away from both: nothing
+        let out = apply_all(&planes, m, Vector::new(1.0, 1.0), a, dt);
+        impulse_shares(&planes, &out, Vector::new(1.0, 1.0), &mut shares);
+        assert_eq!(shares, [Vector::ZERO; 2]);
+    }
+
+    /// (3D) a node sliding along the edge of a wall (n = x) and the ground (n = y): each takes its
+    /// own normal push, and the friction along the edge in proportion μ_i α_i.
+    #[cfg(feature = "dim3")]
+    #[test]
+    fn an_edge_node_splits_pushes_and_friction_between_its_two_planes() {
+        let wall = Boundary::new(Vector::X, coulomb(0.1)).unwrap();
+        let ground = Boundary::new(Vector::Y, coulomb(0.2)).unwrap();
+        let planes = [ground, wall];
+        let (m, v, a, dt) = (2.0, Vector::new(-1.0, -2.0, 3.0), Vector::ZERO, 1e-3);
+        let out = apply_all(&planes, m, v, a, dt);
+        assert!(matches!(out.carriers, Carriers::Two(..)), "{:?}", out.carriers);
+        let mut shares = [Vector::ZERO; 2];
+        impulse_shares(&planes, &out, v, &mut shares);
+        // pushes m·2 (ground) and m·1 (wall); friction m (0.2·2 + 0.1·1) = 1.0 against +z,
+        // split 0.8 : 0.2
+        assert!((shares[0] - Vector::new(0.0, 4.0, -0.8)).length() < 1e-14, "{shares:?}");
+        assert!((shares[1] - Vector::new(2.0, 0.0, -0.2)).length() < 1e-14, "{shares:?}");
+    }
+
+    /// the shares add up to the impulse whatever the planes and the trial velocity: random
+    /// corners of up to four planes (kinks, walls, a fixed plane now and then).
+    #[test]
+    fn the_shares_sum_to_the_impulse() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut carried = 0;
+        for _ in 0..2000 {
+            let count = 1 + (uniform().abs() * 4.0) as usize;
+            let mut planes = Vec::new();
+            for k in 0..count {
+                #[cfg(feature = "dim3")]
+                let n = Vector::new(uniform(), uniform(), uniform());
+                #[cfg(not(feature = "dim3"))]
+                let n = Vector::new(uniform(), uniform());
+                let Some(n) = n.try_normalize() else { continue };
+                let law = if k == 3 && uniform() > 0.5 { Friction::Fixed } else { coulomb(0.5) };
+                planes.push(Boundary::new(n, law).unwrap());
+            }
+            #[cfg(feature = "dim3")]
+            let v = Vector::new(uniform(), uniform(), uniform());
+            #[cfg(not(feature = "dim3"))]
+            let v = Vector::new(uniform(), uniform());
+            let out = apply_all(&planes, 1.5, v, Vector::ZERO, 1e-3);
+            let mut shares = [Vector::ZERO; 4];
+            impulse_shares(&planes, &out, v, &mut shares);
+            let sum: Vector = shares.iter().copied().sum();
+            assert!((sum - out.impulse).length() <= 1e-13, "{sum:?} vs {:?}", out.impulse);
+            carried += usize::from(out.carriers != Carriers::None);
+        }
+        assert!(carried > 500, "the random corners pressed too rarely: {carried}");
     }
 }

@@ -93,8 +93,10 @@ pub type Vector = glam::DVec2;
 pub type Vector = glam::DVec3;
 
 pub use boundary::{Boundary, Friction, NORMAL_LENGTH_TOLERANCE};
-pub use corner::{FEASIBILITY_TOLERANCE, apply_all, constrain_velocity_all, try_apply_all};
+pub use corner::{
+    FEASIBILITY_TOLERANCE, apply_all, constrain_velocity_all, impulse_shares, try_apply_all,
+};
 pub use error::ContactError;
-pub use node_law::{ContactOutcome, ContactStatus};
+pub use node_law::{Carriers, ContactOutcome, ContactStatus};
 pub use sliding::RigidSlide;
 pub use wall::{TOUCH_TOLERANCE, Wall};

@@ -107,6 +107,21 @@ pub enum ContactStatus {
     Fixed,
 }
 
+/// Which of the boundaries handed to the law carried a step's impulse: indices into the slice given
+/// to [`crate::apply_all`] (0 for [`Boundary::apply`]). [`crate::impulse_shares`] divides the impulse
+/// among them, so that a load on each boundary can be reported.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Carriers {
+    /// no boundary: the node was left untouched.
+    None,
+    /// one boundary carried it all: the node ended on that face.
+    One(usize),
+    /// (3D) the two boundaries of the edge the node ended on.
+    Two(usize, usize),
+    /// the pressed boundaries together: the node was pinned in a corner.
+    Corner,
+}
+
 /// The result of constraining one node over one step.
 ///
 /// "Work" is measured against the trial state v\* = v + a Δt, the velocity the node would have had
@@ -130,6 +145,8 @@ pub struct ContactOutcome {
     /// impulse the boundary gave the node this step, N·s: m (v^L − v\*). Divided by Δt it is the
     /// reaction force on the node (the negative of the load on the boundary).
     pub impulse: Vector,
+    /// which boundaries carried the impulse.
+    pub carriers: Carriers,
 }
 
 impl ContactOutcome {
@@ -142,6 +159,7 @@ impl ContactOutcome {
             friction_work: 0.0,
             normal_work: 0.0,
             impulse: Vector::ZERO,
+            carriers: Carriers::None,
         }
     }
 
@@ -155,6 +173,7 @@ impl ContactOutcome {
             friction_work: 0.0,
             normal_work: 0.5 * mass * trial.length_squared(),
             impulse: -mass * trial,
+            carriers: Carriers::Corner,
         }
     }
 }
@@ -277,6 +296,7 @@ impl Face {
             friction_work: 0.5 * mass * (vt_trial * vt_trial - vt_end * vt_end),
             normal_work: 0.5 * mass * self.vn_trial * self.vn_trial,
             impulse: mass * (-self.vn_trial * self.n + as_vector(dvt, self.t)),
+            carriers: Carriers::One(0),
         }
     }
 }

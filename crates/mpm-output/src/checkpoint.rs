@@ -36,8 +36,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// carries the hazard envelopes; 8: the dissipation and the energy rows carry the transfer
 /// dissipation, the solver settings the PIC share and the separation density; 9: the history
 /// carries a 3D run's hazard maps; 10: the hazard maps no longer carry a floor height, the
-/// grid's ground gives it).
-pub const FORMAT: u32 = 10;
+/// grid's ground gives it; 11: the solver state carries each boundary's loads, the history the
+/// wall-load series).
+pub const FORMAT: u32 = 11;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -219,6 +220,9 @@ pub struct History {
     /// a 3D run's hazard maps so far, when the scene asks for them.
     #[serde(default)]
     pub plan: Option<mpm_scene::plan::PlanEnvelope>,
+    /// the rows of `walls.csv` so far, when the scene has a boundary.
+    #[serde(default)]
+    pub walls: Option<crate::loads::WallSeries>,
 }
 
 #[cfg(test)]

@@ -68,6 +68,65 @@ pub fn write(dir: &Path, plan: &PlanEnvelope, deposit: &[f64]) -> Result<(), Out
     Ok(())
 }
 
+/// What the figure and the outlines need beside the maps: the terrain's height at each plan
+/// cell's centre, the cells the release started in, and a title.
+pub struct Context<'a> {
+    /// the figure's title.
+    pub title: &'a str,
+    /// the terrain height at each plan cell's centre (m), in the plan's order.
+    pub ground: &'a [f64],
+    /// the cells where the released material started.
+    pub release: &'a [bool],
+}
+
+/// writes `maps/outlines.geojson` (the release, the affected area (a flow height > 0) and the
+/// deposit (a depth > 0) as MultiPolygons in map coordinates, with their areas) and
+/// `maps/hazard_map.png` (`mapfig`) for the plan and its final `deposit` depths.
+pub fn figures(
+    dir: &Path,
+    plan: &PlanEnvelope,
+    deposit: &[f64],
+    context: &Context<'_>,
+) -> Result<(), OutputError> {
+    let maps = dir.join("maps");
+    let height: Vec<f64> = plan.cells.iter().map(|c| c.max_height).collect();
+    let affected: Vec<bool> = height.iter().map(|&h| h > 0.0).collect();
+    let deposited: Vec<bool> = deposit.iter().map(|&d| d > 0.0).collect();
+    let corner = [plan.x0, -plan.z0];
+    let area = |m: &[bool]| m.iter().filter(|&&b| b).count() as f64 * plan.cell * plan.cell;
+    let outline = |name, mask| crate::outline::Outline {
+        name,
+        mask,
+        properties: vec![("area_m2", area(mask))],
+    };
+    let text = crate::outline::geojson(
+        &[
+            outline("release", context.release),
+            outline("affected", &affected),
+            outline("deposit", &deposited),
+        ],
+        plan.cols,
+        plan.rows,
+        plan.cell,
+        corner,
+    );
+    crate::atomic::write(&maps.join("outlines.geojson"), text.as_bytes())?;
+    crate::mapfig::write(
+        &maps.join("hazard_map.png"),
+        &crate::mapfig::MapFigure {
+            title: context.title,
+            cols: plan.cols,
+            rows: plan.rows,
+            cell: plan.cell,
+            corner,
+            ground: context.ground,
+            height: &height,
+            release: context.release,
+            deposit: &deposited,
+        },
+    )
+}
+
 fn fail(path: &Path, e: mpm_dem::DemError) -> OutputError {
     OutputError::Io { path: path.to_path_buf(), source: std::io::Error::other(e.to_string()) }
 }

@@ -20,7 +20,7 @@ static REGISTER: Once = Once::new();
 
 /// registers the embedded font as plotters' "sans-serif" (once per process): plotters draws text
 /// only with a registered font.
-fn register_font() {
+pub(crate) fn register_font() {
     REGISTER.call_once(|| {
         // The embedded font is a valid TTF; if registration failed, text would be missing but
         // the plot would still be drawn.

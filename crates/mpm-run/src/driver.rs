@@ -23,12 +23,26 @@ use mpm_solver::{
 
 use mpm_output::checkpoint::{self, CheckpointFile, History};
 use mpm_output::csv::{self, EnergyRow, ProbeRow};
+use mpm_output::loads::{self, LoadSample, WallSeries};
 use mpm_output::report::{self, Deposit};
 use mpm_output::{OutputError, atomic, vtk};
 
 use crate::error::RunError;
 use crate::options::RunOptions;
 use crate::progress::ProgressSink;
+
+/// the solver's boundary loads as the output's samples.
+fn load_samples(loads: &[mpm_solver::BoundaryLoad]) -> Vec<LoadSample> {
+    let v = |v: Vector| [v.x, v.y, 0.0];
+    loads
+        .iter()
+        .map(|l| LoadSample {
+            impulse: v(l.impulse),
+            normal: l.normal,
+            tangential: v(l.tangential),
+        })
+        .collect()
+}
 
 /// the summary's message for a tripped energy alarm (`None` if it did not trip).
 fn alarm_message(h: &History, threshold: f64) -> Option<String> {
@@ -224,6 +238,7 @@ enum Stop {
 #[derive(Clone, Copy, Debug, Default)]
 struct Flushed {
     energy: usize,
+    walls: usize,
     probes: usize,
     runout: usize,
 }
@@ -309,6 +324,17 @@ impl Driver<'_> {
         }
         let m = self.metrics(solver);
         self.history.runout.push(m);
+        if self.history.walls.is_none() {
+            let (b, walls) = (&r.config.boundaries, r.config.walls.len());
+            let sides = [b.ground, b.left_wall, b.right_wall].map(|s| s.is_some());
+            let boundaries = crate::loads::boundaries(&mpm_solver::SIDE_NAMES, &sides, walls);
+            if !boundaries.is_empty() {
+                self.history.walls = Some(WallSeries::new(boundaries, 2));
+            }
+        }
+        if let Some(w) = &mut self.history.walls {
+            w.push(t, &load_samples(solver.boundary_loads()));
+        }
     }
 
     pub(crate) fn write_frame<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
@@ -370,6 +396,9 @@ impl Driver<'_> {
             &mut f.runout,
             csv::runout,
         )?;
+        if let Some(w) = &h.walls {
+            csv::flush(&dir.join("walls.csv"), &w.header(), &w.rows, &mut f.walls, loads::lines)?;
+        }
         if !self.scene.resolved().output.probes.is_empty() {
             csv::flush(
                 &dir.join("probes.csv"),
@@ -474,6 +503,11 @@ impl Driver<'_> {
             warnings: r.warnings.iter().map(ToString::to_string).collect(),
             dimension: 2,
             hazard_maps: None,
+            walls: h
+                .walls
+                .as_ref()
+                .map(|w| w.summary(&load_samples(solver.boundary_loads())))
+                .unwrap_or_default(),
         }
     }
 

@@ -31,6 +31,7 @@
 //! energy.csv            energy ledger over time
 //! probes.csv            probe particles (when the scene declares probes)
 //! runout.csv            front, tail, max thickness, centre-of-mass travel over time
+//! walls.csv             per grid side and declared wall: normal, shear and force vector on it
 //! envelope.csv          per ground station: largest thickness, speeds, pressure, arrival
 //! deposit.csv           per ground station: the final deposit's thickness (with envelope)
 //! plots/*.png           energy, probes (with the analytic curve), runout, deposit, envelope
@@ -55,6 +56,7 @@
 mod driver;
 mod element;
 mod error;
+mod loads;
 mod options;
 mod progress;
 mod run;

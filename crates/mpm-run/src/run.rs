@@ -303,10 +303,14 @@ pub(crate) fn fits(
         ("runout rows", h.runout.len() as u64, rows),
         ("frames", h.frames.len() as u64, rows),
         ("probe rows", h.probes.len() as u64, probes),
+        ("wall-load rows", h.walls.as_ref().map_or(0, |w| w.rows.len() as u64), rows),
     ] {
         if n > most {
             return Err(format!("{n} {what} after {step} steps (at most {most})"));
         }
+    }
+    if let Some(why) = h.walls.as_ref().and_then(|w| w.malformed()) {
+        return Err(why);
     }
     Ok(())
 }

@@ -23,6 +23,7 @@ use mpm_grid3d::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History, state_hash};
 use mpm_output::csv::{self, EnergyRow};
 use mpm_output::dir::prepare_dir;
+use mpm_output::loads::{self, LoadSample, WallSeries};
 use mpm_output::{OutputError, atomic, maps, report, vtk};
 use mpm_scene::dispatch::SceneModel;
 use mpm_scene::plan::PlanEnvelope;
@@ -52,6 +53,18 @@ fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
         external_work: l.external_work,
         residual: l.residual,
     }
+}
+
+/// the solver's boundary loads as the output's samples.
+fn load_samples(loads: &[mpm_solver3d::BoundaryLoad]) -> Vec<LoadSample> {
+    loads
+        .iter()
+        .map(|l| LoadSample {
+            impulse: l.impulse.to_array(),
+            normal: l.normal,
+            tangential: l.tangential.to_array(),
+        })
+        .collect()
 }
 
 /// Validates a 3D scene fully without stepping: every particle located, and particles, active
@@ -238,6 +251,8 @@ struct SpaceDriver<'a> {
     scene: &'a SpaceScene,
     /// the hazard maps so far (`[output] hazard_maps`), observed every step.
     plan: Option<PlanEnvelope>,
+    /// the rows of `walls.csv` so far (a scene with a boundary).
+    walls: Option<WallSeries>,
     /// when this session started, and at which step.
     session: (Instant, u64),
     /// wall time (s) and particle-steps of earlier sessions (a resumed run's).
@@ -258,7 +273,7 @@ struct SpaceDriver<'a> {
     energy: Vec<EnergyRow>,
     runout: Vec<RunoutMetrics>,
     frames: Vec<(f64, String)>,
-    flushed: [usize; 2],
+    flushed: [usize; 3],
     check: EnergyCheck,
     alarm_time: Option<f64>,
     rest_peak: f64,
@@ -341,7 +356,8 @@ impl<'a> SpaceDriver<'a> {
             energy: Vec::new(),
             runout: Vec::new(),
             frames: Vec::new(),
-            flushed: [0; 2],
+            flushed: [0; 3],
+            walls: None,
             check,
             alarm_time: None,
             rest_peak: 0.0,
@@ -371,6 +387,7 @@ impl<'a> SpaceDriver<'a> {
                 };
             }
             d.alarm_time = h.alarm_time;
+            d.walls = h.walls;
             if d.plan.is_some() {
                 d.plan = h.plan;
             }
@@ -413,6 +430,7 @@ impl<'a> SpaceDriver<'a> {
             alarm_time: self.alarm_time,
             envelope: None,
             plan: self.plan.clone(),
+            walls: self.walls.clone(),
         }
     }
 
@@ -436,7 +454,7 @@ impl<'a> SpaceDriver<'a> {
     /// rewrites the series and the frame collection from the history (a resumed run's).
     fn rewrite_outputs(&mut self) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        self.flushed = [0; 2];
+        self.flushed = [0; 3];
         self.flush()?;
         if self.scene.output.vtk {
             atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.frames).as_bytes())?;
@@ -517,6 +535,18 @@ impl<'a> SpaceDriver<'a> {
         });
         let m = self.metrics(solver);
         self.runout.push(m);
+        if self.walls.is_none() {
+            let (b, walls) = (&self.scene.config.boundaries, self.scene.config.walls.len());
+            let sides = [b.ground, b.left_wall, b.right_wall, b.back_wall, b.front_wall];
+            let sides = sides.map(|s| s.is_some());
+            let boundaries = crate::loads::boundaries(&mpm_solver3d::SIDE_NAMES, &sides, walls);
+            if !boundaries.is_empty() {
+                self.walls = Some(WallSeries::new(boundaries, 3));
+            }
+        }
+        if let Some(w) = &mut self.walls {
+            w.push(t, &load_samples(solver.boundary_loads()));
+        }
     }
 
     fn write_frame<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
@@ -550,9 +580,12 @@ impl<'a> SpaceDriver<'a> {
     fn flush(&mut self) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
         let clock = Instant::now();
-        let [e, r] = &mut self.flushed;
+        let [e, r, w] = &mut self.flushed;
         csv::flush(&dir.join("energy.csv"), csv::ENERGY_HEADER, &self.energy, e, csv::energy)?;
         csv::flush(&dir.join("runout.csv"), csv::RUNOUT_HEADER, &self.runout, r, csv::runout)?;
+        if let Some(s) = &self.walls {
+            csv::flush(&dir.join("walls.csv"), &s.header(), &s.rows, w, loads::lines)?;
+        }
         self.output_time += clock.elapsed().as_secs_f64();
         Ok(())
     }
@@ -649,6 +682,11 @@ impl<'a> SpaceDriver<'a> {
             warnings: scene.warnings.iter().map(ToString::to_string).collect(),
             dimension: 3,
             hazard_maps: None,
+            walls: self
+                .walls
+                .as_ref()
+                .map(|w| w.summary(&load_samples(solver.boundary_loads())))
+                .unwrap_or_default(),
         };
         let deposit = self.plan.as_ref().map(|e| {
             let flow: Vec<mpm_solver3d::Vector> =
@@ -675,6 +713,27 @@ impl<'a> SpaceDriver<'a> {
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
             if let (Some(e), Some((depth, _))) = (&self.plan, &deposit) {
                 maps::write(dir, e, depth)?;
+                let centre = |k: usize| e.cell * (k as f64 + 0.5);
+                let ground: Vec<f64> = (0..e.rows * e.cols)
+                    .map(|k| {
+                        let (c, r) = (k % e.cols, k / e.cols);
+                        scene.grid.ground(e.x0 + centre(c), e.z0 + centre(r)).0
+                    })
+                    .collect();
+                let mut release = vec![false; e.rows * e.cols];
+                for q in flowing(scene, p) {
+                    let x = p.initial_position[q];
+                    let (c, r) = ((x.x - e.x0) / e.cell, (x.z - e.z0) / e.cell);
+                    if c >= 0.0 && r >= 0.0 && (c as usize) < e.cols && (r as usize) < e.rows {
+                        release[r as usize * e.cols + c as usize] = true;
+                    }
+                }
+                let title = format!(
+                    "{}: largest flow height, t = {t:.1} s",
+                    scene.title().unwrap_or("hazard map")
+                );
+                let context = maps::Context { title: &title, ground: &ground, release: &release };
+                maps::figures(dir, e, depth, &context)?;
             }
             if scene.output.plots {
                 // the flowing particles, north (−z) up as in maps/

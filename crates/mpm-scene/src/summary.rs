@@ -107,6 +107,26 @@ pub struct RunoutMetrics {
     pub front_speed: f64,
 }
 
+/// The load one boundary (a grid side or a declared wall) took over a run (`summary.json` `walls`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WallLoad {
+    /// `ground`, `left_wall`, `right_wall` (`back_wall`, `front_wall` in 3D), or `wall_k` for the
+    /// k-th `[[boundaries.walls]]` entry.
+    pub name: String,
+    /// the forces' unit: "N/m" (per metre of thickness, 2D) or "N" (3D); impulses are it times s.
+    pub unit: String,
+    /// the largest normal load (the material pressing on it), as a mean over a series interval.
+    pub peak_normal_force: f64,
+    /// when (s): the end of that interval.
+    pub peak_normal_time: f64,
+    /// the largest shear (friction) load, as a mean over a series interval.
+    pub peak_shear_force: f64,
+    /// ∫ normal load dt over the run.
+    pub normal_impulse: f64,
+    /// ∫ force on it dt over the run, as a vector.
+    pub impulse: Vec<f64>,
+}
+
 /// Everything a run reports, written as `summary.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunSummary {
@@ -170,6 +190,9 @@ pub struct RunSummary {
     /// a 3D run's plan indicators, when it draws hazard maps (`[output] hazard_maps`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hazard_maps: Option<crate::plan::PlanIndicators>,
+    /// the loads each grid side and declared wall took (`walls.csv` has them over time).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walls: Vec<WallLoad>,
 }
 
 /// the dimension of a summary written before 3D scenes existed.

@@ -394,6 +394,14 @@ impl SolverConfig {
                 });
             }
         }
+        // (each boundary's loads are indexed by a u16: `loads.rs`)
+        if self.walls.len() > usize::from(u16::MAX) - crate::SIDES {
+            return Err(SolverError::InvalidSetting {
+                name: "walls",
+                value: self.walls.len() as f64,
+                expected: "at most 65 000 walls",
+            });
+        }
         Ok(())
     }
 }

@@ -49,6 +49,9 @@ pub(crate) struct ConsistentScratch {
     pub(crate) prescribed: Vec<u32>,
     /// The nodes whose reactions the ledger books (`Solver::book_reactions`).
     pub(crate) reacting: Vec<u32>,
+    /// (node, boundary, normal) of each reacting node, sorted by node: where its reaction is
+    /// booked among the loads (`loads.rs`).
+    pub(crate) sources: Vec<(u32, u16, Vector)>,
     /// Right-hand side, residual, search direction, its product with M.
     pub(crate) rhs: Vec<Vector>,
     pub(crate) residual: Vec<Vector>,
@@ -76,6 +79,7 @@ impl ConsistentScratch {
             + self.free.capacity()
             + (self.prescribed.capacity() + self.reacting.capacity() + 2 * self.slaves.capacity())
                 * size_of::<u32>()
+            + self.sources.capacity() * size_of::<(u32, u16, Vector)>()
             + (self.rhs.capacity()
                 + self.residual.capacity()
                 + self.direction.capacity()

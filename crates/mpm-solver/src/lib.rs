@@ -55,6 +55,7 @@ pub mod generate;
 pub mod generate;
 #[cfg(not(feature = "dim3"))]
 pub mod geostatic;
+pub mod loads;
 pub mod math;
 mod par;
 pub use par::{PARTICLES_PER_THREAD, useful_threads};
@@ -75,6 +76,7 @@ pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};
 #[cfg(not(feature = "dim3"))]
 pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleReport};
+pub use loads::{BoundaryLoad, SIDE_NAMES, SIDES};
 pub use math::{DIM, Matrix, Real, Stress, Vector};
 pub use particles::{NewParticle, Particles};
 pub use report::{BranchCounts, Checkpoint, RunEnd, StepReport};

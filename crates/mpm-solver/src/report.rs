@@ -93,6 +93,10 @@ pub struct Checkpoint<St> {
     pub step: u64,
     /// Energy dissipated so far.
     pub dissipation: Dissipation,
+    /// What each boundary gave the material so far ([`crate::Solver::boundary_loads`]); empty in
+    /// a new run.
+    #[serde(default)]
+    pub loads: Vec<crate::BoundaryLoad>,
     /// Stored energy at the start of the run (the ledger's reference).
     pub initial_stored: Real,
     /// Lightest initial density of each material (kg/m³): the time step's reference (see

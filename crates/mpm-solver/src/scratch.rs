@@ -56,7 +56,12 @@ pub(crate) struct FixedGhost {
     pub(crate) books: bool,
     /// the ghost's acceleration and velocity before the boundary conditions
     pub(crate) trial: (Vector, Vector),
+    /// the side whose plane it is behind (its entry of `Solver::loads`), and that plane's normal
+    pub(crate) source: (u16, Vector),
 }
+
+/// (image, ghost force, ghost mass, books the impulse, (side, normal)): see `Scratch::ties`.
+pub(crate) type Tie = (u32, Vector, Real, bool, (u16, Vector));
 
 /// One plane near a boundary node, placed as a [`Wall`]: a grid side passes through the node (or,
 /// for a ghost node, halfway to its image), a declared wall lies wherever the scene put it.
@@ -68,6 +73,8 @@ pub(crate) struct NodePlane {
     pub(crate) always: bool,
     /// The plane holds the node during the coming step (see [`crate::Contact`]); set every step.
     pub(crate) held: bool,
+    /// Which boundary it belongs to: its entry of `Solver::loads` (`loads.rs`).
+    pub(crate) source: u16,
 }
 
 /// The mirror image of a ghost node (a node outside the grid, reached by wide stencils) across a
@@ -164,9 +171,12 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) node_planes: Vec<NodePlane>,
     /// The planes holding one node, gathered for the contact law (reused).
     pub(crate) plane_buf: Vec<Boundary>,
-    /// (image, ghost force, ghost mass, books the impulse) of the ghosts behind fixed planes that
-    /// the lumped grid solve ties to their images (`stages/grid.rs`, reused).
-    pub(crate) ties: Vec<(u32, Vector, Real, bool)>,
+    /// (image, ghost force, ghost mass, books the impulse, its side and normal) of the ghosts
+    /// behind fixed planes that the lumped grid solve ties to their images (`stages/grid.rs`,
+    /// reused).
+    pub(crate) ties: Vec<Tie>,
+    /// Each held plane's share of a node's contact impulse, for the loads (`stages/grid.rs`).
+    pub(crate) shares: Vec<Vector>,
     /// The held ghost nodes behind fixed planes in this step's grid solve (either matrix).
     pub(crate) fixed_ghosts: Vec<FixedGhost>,
     /// The arrays below `first_node` describe the current `first_node` (false before the first
@@ -221,6 +231,7 @@ impl<F, const N: usize> Scratch<F, N> {
             node_planes: Vec::new(),
             plane_buf: Vec::new(),
             ties: Vec::new(),
+            shares: Vec::new(),
             fixed_ghosts: Vec::new(),
             located: false,
             stencils_ahead: None,
@@ -264,7 +275,8 @@ impl<F, const N: usize> Scratch<F, N> {
             + self.boundary.capacity() * size_of::<BoundaryNode>()
             + self.node_planes.capacity() * size_of::<NodePlane>()
             + self.plane_buf.capacity() * size_of::<Boundary>()
-            + self.ties.capacity() * size_of::<(u32, Vector, Real, bool)>()
+            + self.ties.capacity() * size_of::<Tie>()
+            + self.shares.capacity() * size_of::<Vector>()
             + self.fixed_ghosts.capacity() * size_of::<FixedGhost>()
             + (self.held.capacity() + self.corrections.capacity()) * size_of::<(u32, Vector)>()
             + self.consistent.heap_bytes()

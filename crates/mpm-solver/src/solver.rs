@@ -72,6 +72,8 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) time: Real,
     pub(crate) step: u64,
     pub(crate) dissipation: Dissipation,
+    /// What each grid side and declared wall gave the material (`loads.rs`).
+    pub(crate) loads: Vec<crate::BoundaryLoad>,
     pub(crate) initial_stored: Real,
     /// Absolute small-mass threshold (kg per metre).
     pub(crate) small_mass: Real,
@@ -122,6 +124,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 time: 0.0,
                 step: 0,
                 dissipation: Dissipation::default(),
+                loads: Vec::new(),
                 initial_stored: f64::NAN,
                 reference_density: Vec::new(),
             },
@@ -173,6 +176,18 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 expected: "finite energies (J/m)",
             });
         }
+        let boundaries = crate::SIDES + config.walls.len();
+        let loads = match checkpoint.loads {
+            l if l.is_empty() => vec![crate::BoundaryLoad::default(); boundaries],
+            l if l.len() == boundaries && l.iter().all(crate::BoundaryLoad::is_finite) => l,
+            l => {
+                return Err(SolverError::InvalidSetting {
+                    name: "checkpoint.loads",
+                    value: l.len() as f64,
+                    expected: "finite loads, one per grid side and declared wall",
+                });
+            }
+        };
         let mut particles = particles;
         match config.transfer {
             // APIC starts from C_p = 0 unless the caller filled the affine matrices (with the
@@ -205,6 +220,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             time: checkpoint.time,
             step: checkpoint.step,
             dissipation: checkpoint.dissipation,
+            loads,
             initial_stored: checkpoint.initial_stored,
             small_mass,
             cell_size,
@@ -247,6 +263,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             time: self.time,
             step: self.step,
             dissipation: self.dissipation,
+            loads: self.loads.clone(),
             initial_stored: self.initial_stored,
             reference_density: self.reference_density.clone(),
         }
@@ -339,6 +356,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// breaks Newton's third law there: set `small_mass_ratio = 0` for an exact balance).
     pub fn boundary_impulse(&self) -> Vector {
         self.dissipation.impulse
+    }
+
+    /// what each boundary gave the material since the start (`loads.rs`): the grid's sides
+    /// ([`crate::SIDE_NAMES`]), then the declared walls in their order. They add up to
+    /// [`Self::boundary_impulse`].
+    pub fn boundary_loads(&self) -> &[crate::BoundaryLoad] {
+        &self.loads
     }
 
     /// steps completed.

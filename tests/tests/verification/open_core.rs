@@ -54,6 +54,16 @@ fn a_block_thrown_into_an_inclined_check_dam_rebounds_without_entering_it() {
             // no particle's edge passes the face by more than the touching rule's slack
             // (measured: every edge stays 0.7–0.9 % of a half-size in front of it)
             assert!(r.closest_edge >= -TOUCH_TOLERANCE, "{what}: {}", r.closest_edge);
+            // The wall's own load (walls.csv, summary.json) is the momentum the block brought
+            // into it: the whole boundary impulse, split along its normal and tangent as the
+            // block's momentum changed (one plane: the same rounding as the balance).
+            let p0 = r.momentum_start.length();
+            let load = r.wall_load;
+            assert!((load.impulse - r.wall_impulse).length() <= OBSTACLE_REL * p0, "{what}");
+            assert_eq!(r.other_loads, 0.0, "{what}: no other boundary");
+            assert!((load.normal / p0 - r.normal_change).abs() <= OBSTACLE_REL, "{what}: {load:?}");
+            let t = load.tangential.length() / p0;
+            assert!((t - r.tangential_change.abs()).abs() <= OBSTACLE_REL, "{what}: {load:?}");
             if mu == 0.0 {
                 assert!(r.tangential_change.abs() <= OBSTACLE_REL, "{what}: {r:?}");
             } else {

@@ -99,6 +99,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         };
         self.grid_mass_kept = None;
         self.dissipation = crate::energy::Dissipation::default();
+        self.loads.fill(crate::BoundaryLoad::default());
         self.next_signal = None;
         self.initial_stored = self.energy().stored();
     }

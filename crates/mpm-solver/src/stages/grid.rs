@@ -11,7 +11,9 @@
 //! [`Contact::Node`] (the paper's rule) always.
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_contact::{Boundary, Friction, apply_all, constrain_velocity_all};
+use mpm_contact::{
+    Boundary, Carriers, ContactOutcome, Friction, apply_all, constrain_velocity_all, impulse_shares,
+};
 use mpm_grid::ShapeFunctions;
 use std::sync::atomic::Ordering;
 
@@ -19,6 +21,7 @@ use rayon::prelude::*;
 
 use crate::config::{Contact, MassMatrix};
 use crate::error::SolverError;
+use crate::loads::BoundaryLoad;
 use crate::math::{Real, Vector};
 use crate::scratch::{FixedGhost, NodePlane, Scratch};
 use crate::solver::Solver;
@@ -39,7 +42,12 @@ pub(crate) fn held_planes<'a>(buf: &'a mut Vec<Boundary>, planes: &[NodePlane]) 
 /// ghosts of one image all add. Returns the impulse the tie gives the material at the images,
 /// Σ (m_j a_j − f_j) Δt (the ghost's share is booked by `mirror_fixed_ghosts`; with periodic
 /// sides a pair's partner books it).
-fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: Real) -> Vector {
+fn tie_fixed_ghosts<F, const N: usize>(
+    sc: &mut Scratch<F, N>,
+    loads: &mut [BoundaryLoad],
+    small: Real,
+    dt: Real,
+) -> Vector {
     sc.ties.clear();
     for b in &sc.boundary {
         let Some(m) = b.mirror.filter(|m| m.fixed) else { continue };
@@ -48,7 +56,8 @@ fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: 
         }
         let (g, j) = (b.node as usize, m.image as usize);
         if sc.mass[g] > small && sc.mass[j] > small {
-            sc.ties.push((m.image, sc.force[g], sc.mass[g], b.partner.is_none()));
+            let source = mirror_source(&sc.node_planes[b.planes()], m.normal);
+            sc.ties.push((m.image, sc.force[g], sc.mass[g], b.partner.is_none(), source));
         }
     }
     // stable: the ghosts of one image add in boundary order, whatever the threads
@@ -57,7 +66,8 @@ fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: 
     let mut k = 0;
     while k < sc.ties.len() {
         let j = sc.ties[k].0 as usize;
-        let (mut f, mut m, book) = (sc.force[j], sc.mass[j], sc.ties[k].3);
+        let first = sc.ties[k];
+        let (mut f, mut m, book) = (sc.force[j], sc.mass[j], first.3);
         while k < sc.ties.len() && sc.ties[k].0 as usize == j {
             f -= sc.ties[k].1;
             m += sc.ties[k].2;
@@ -65,10 +75,20 @@ fn tie_fixed_ghosts<F, const N: usize>(sc: &mut Scratch<F, N>, small: Real, dt: 
         }
         sc.acceleration[j] = f / m;
         if book {
-            impulse += (sc.mass[j] * sc.acceleration[j] - sc.force[j]) * dt;
+            let dp = (sc.mass[j] * sc.acceleration[j] - sc.force[j]) * dt;
+            impulse += dp;
+            // (an image tied to the ghosts of two sides, in a corner: booked to the first)
+            let (source, normal) = first.4;
+            loads[source as usize].add(dp, normal);
         }
     }
     impulse
+}
+
+/// the side a ghost node's mirror plane of normal `normal` belongs to, with that normal.
+pub(crate) fn mirror_source(planes: &[NodePlane], normal: Vector) -> (u16, Vector) {
+    let source = planes.iter().find(|p| p.wall.normal() == normal).map_or(0, |p| p.source);
+    (source, normal)
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -124,6 +144,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.solve_acceleration()?;
         let sc = &mut self.scratch;
 
+        let loads = &mut self.loads;
+
         let (mut friction, mut constraint, mut impulse) = (0.0, 0.0, Vector::ZERO);
         let surface = self.config.contact == Contact::Surface;
         let consistent = self.config.mass == MassMatrix::Consistent;
@@ -131,7 +153,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         sc.consistent.constrained.clear();
         sc.fixed_ghosts.clear();
         if !consistent {
-            impulse += tie_fixed_ghosts(sc, small, dt);
+            impulse += tie_fixed_ghosts(sc, loads, small, dt);
         }
         for b in &sc.boundary {
             let i = b.node as usize;
@@ -158,6 +180,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                         image: m.image,
                         books: b.partner.is_none(),
                         trial: (sc.acceleration[i], sc.velocity[i]),
+                        source: mirror_source(&sc.node_planes[b.planes()], m.normal),
                     });
                     continue;
                 }
@@ -223,6 +246,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 continue;
             }
             impulse += out.impulse;
+            book_load(loads, &sc.node_planes[b.planes()], planes, &out, trial, &mut sc.shares);
             let mean_v = 0.5 * (v_rel + out.velocity);
             let n = planes[0].normal();
             let (jn, vn) = (out.impulse.dot(n), mean_v.dot(n));
@@ -267,6 +291,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 dp += sc.mass[g] * (sc.velocity[g] - v);
             }
             self.dissipation.impulse += dp;
+            let (source, normal) = f.source;
+            self.loads[source as usize].add(dp, normal);
         }
     }
 
@@ -312,6 +338,34 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let sc = &mut self.scratch;
         for (b, &v) in sc.boundary.iter().zip(&sc.saved) {
             sc.velocity[b.node as usize] = v;
+        }
+    }
+}
+
+/// books a boundary node's contact impulse `out` (from `held`, the planes of `planes` that held it,
+/// in order) to the boundaries that carried it (`loads.rs`), each part with its plane's normal.
+fn book_load(
+    loads: &mut [BoundaryLoad],
+    planes: &[NodePlane],
+    held: &[Boundary],
+    out: &ContactOutcome,
+    trial: Vector,
+    shares: &mut Vec<Vector>,
+) {
+    let mut carriers = planes.iter().filter(|p| p.held);
+    match out.carriers {
+        Carriers::None => {}
+        Carriers::One(k) => {
+            if let Some(p) = carriers.nth(k) {
+                loads[p.source as usize].add(out.impulse, p.wall.normal());
+            }
+        }
+        Carriers::Two(..) | Carriers::Corner => {
+            shares.resize(held.len(), Vector::ZERO);
+            impulse_shares(held, out, trial, shares);
+            for (p, &j) in carriers.zip(shares.iter()) {
+                loads[p.source as usize].add(j, p.wall.normal());
+            }
         }
     }
 }

@@ -191,25 +191,26 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
         let here = shape.node_position(node);
         let first = sc.node_planes.len();
         let normals = shape.boundary_normals(node);
-        for (law, normal) in [
-            (sides.ground, normals.ground),
-            (sides.ground, normals.ground_kink),
+        // (the source: the side's entry of `SIDE_NAMES`)
+        for (source, law, normal) in [
+            (0, sides.ground, normals.ground),
+            (0, sides.ground, normals.ground_kink),
             #[cfg(feature = "dim3")]
-            (sides.ground, normals.ground_more[0]),
+            (0, sides.ground, normals.ground_more[0]),
             #[cfg(feature = "dim3")]
-            (sides.ground, normals.ground_more[1]),
-            (sides.left_wall, normals.left_wall),
-            (sides.right_wall, normals.right_wall),
+            (0, sides.ground, normals.ground_more[1]),
+            (1, sides.left_wall, normals.left_wall),
+            (2, sides.right_wall, normals.right_wall),
             #[cfg(feature = "dim3")]
-            (sides.back_wall, normals.back_wall),
+            (3, sides.back_wall, normals.back_wall),
             #[cfg(feature = "dim3")]
-            (sides.front_wall, normals.front_wall),
+            (4, sides.front_wall, normals.front_wall),
         ] {
             if let (Some(law), Some(normal)) = (law, normal) {
                 // The grid hands out unit normals and the friction law was validated with the
                 // scene, so construction cannot fail here.
                 if let Ok(wall) = Wall::plane(here, normal, law) {
-                    sc.node_planes.push(NodePlane { wall, always: false, held: false });
+                    sc.node_planes.push(NodePlane { wall, always: false, held: false, source });
                 }
             }
         }
@@ -236,11 +237,12 @@ fn boundary_nodes<F, S: ShapeFunctions<N>, const N: usize>(
         }
         // (a ghost node meets its side's mirror plane; a declared wall acts on the grid's nodes)
         let walls = if mirror.is_some() { &[][..] } else { walls };
-        for wall in walls.iter().filter(|w| w.near(here, reach)) {
+        for (k, wall) in walls.iter().enumerate().filter(|(_, w)| w.near(here, reach)) {
             sc.node_planes.push(NodePlane {
                 wall: *wall,
                 always: hold_always(wall, here),
                 held: false,
+                source: (crate::SIDES + k) as u16,
             });
         }
         let count = sc.node_planes.len() - first;

@@ -323,6 +323,20 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         cm.reacting.extend(sc.fixed_ghosts.iter().flat_map(|g| [g.ghost, g.image]));
         cm.reacting.sort_unstable();
         cm.reacting.dedup();
+        // Each one's boundary, for the loads: a held node's first held plane; an image, its
+        // ghost's mirror plane (the first ghost's, for an image of two).
+        cm.sources.clear();
+        for b in &sc.boundary {
+            let planes = &sc.node_planes[b.planes()];
+            let Some(p) = planes.iter().find(|p| p.held) else { continue };
+            cm.sources.push((b.node, p.source, p.wall.normal()));
+            if let Some(m) = b.mirror {
+                let (source, normal) = crate::stages::grid::mirror_source(planes, m.normal);
+                cm.sources.push((m.image, source, normal));
+            }
+        }
+        cm.sources.sort_by_key(|s| s.0);
+        cm.sources.dedup_by_key(|s| s.0);
         let sc = &self.scratch;
         let cm = &sc.consistent;
         let band = cm.band;
@@ -367,6 +381,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             let mean_v = v[i] + 0.5 * dt * a[i] - wall;
             let n = plane.wall.boundary().normal();
             friction += r.dot(mean_v) - r.dot(n) * mean_v.dot(n);
+        }
+        for &i in &cm.reacting {
+            if let Ok(k) = cm.sources.binary_search_by_key(&i, |s| s.0) {
+                let (_, source, normal) = cm.sources[k];
+                self.loads[source as usize].add(reaction(i as usize) * dt, normal);
+            }
         }
         let d = &mut self.dissipation;
         d.impulse += total.truncate();
