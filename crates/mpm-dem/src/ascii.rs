@@ -45,22 +45,23 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
         }
     })?;
     let raster = parse(text, &file, bytes.len() as u64, budget)?;
-    geographic(path, &raster)?;
-    Ok(raster)
+    let wkt = geographic(path, &raster)?;
+    Ok(raster.with_crs(crate::Crs { geokeys: None, wkt }))
 }
 
 /// An ESRI ASCII grid carries no CRS: its map units are taken as metres. It is refused as
 /// being in degrees when its `.prj` beside it says so (a `GEOGCS` without a `PROJCS`), or when
 /// its cells are under a millimetre across an extent that fits in longitude and latitude (no
 /// DEM in metres has such cells; 1 arc-second is 2.8e-4 degrees).
-fn geographic(path: &Path, r: &Raster) -> Result<(), DemError> {
+/// Returns the `.prj`'s text (its CRS, carried to what is written on the raster's frame).
+fn geographic(path: &Path, r: &Raster) -> Result<Option<String>, DemError> {
     let file = path.display().to_string();
     let prj = path.with_extension("prj");
     let wkt = std::fs::metadata(&prj)
         .is_ok_and(|m| m.file_type().is_file() && m.len() < 1 << 20)
         .then(|| std::fs::read_to_string(&prj).ok())
         .flatten();
-    if let Some(wkt) = wkt {
+    if let Some(wkt) = &wkt {
         let wkt = wkt.to_ascii_uppercase();
         let geographic = wkt.contains("GEOGCS") || wkt.contains("GEOGCRS");
         if geographic && !wkt.contains("PROJCS") && !wkt.contains("PROJCRS") {
@@ -91,7 +92,7 @@ fn geographic(path: &Path, r: &Raster) -> Result<(), DemError> {
             ),
         });
     }
-    Ok(())
+    Ok(wkt)
 }
 
 /// The header's values, as they are read.
@@ -321,7 +322,14 @@ pub fn write(raster: &Raster, path: &Path) -> Result<(), DemError> {
         s.push('\n');
     }
     std::fs::write(path, s)
-        .map_err(|source| DemError::Io { file: path.display().to_string(), source })
+        .map_err(|source| DemError::Io { file: path.display().to_string(), source })?;
+    // the CRS as a `.prj` beside it, when the raster carries one as WKT
+    if let Some(wkt) = &raster.crs().wkt {
+        let prj = path.with_extension("prj");
+        std::fs::write(&prj, wkt)
+            .map_err(|source| DemError::Io { file: prj.display().to_string(), source })?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -166,7 +166,36 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
         Some(&v) => v,
         None => d,
     });
-    Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)
+    let doubles: Vec<f64> = d
+        .find_tag(Tag::GeoDoubleParamsTag)
+        .map_err(tiff)?
+        .and_then(|v| v.into_f64_vec().ok())
+        .unwrap_or_default();
+    let ascii = match d.find_tag(Tag::GeoAsciiParamsTag).map_err(tiff)? {
+        // (without the terminating NUL, which writing adds again)
+        Some(v) => v.into_string().unwrap_or_default().trim_end_matches('\0').to_string(),
+        None => String::new(),
+    };
+    let crs =
+        crate::Crs { geokeys: (keys.len() >= 4).then_some((keys, doubles, ascii)), wkt: None };
+    Ok(Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)?.with_crs(crs))
+}
+
+/// The GeoKeyDirectory a written raster carries: its CRS's keys, if it has any, with
+/// GTRasterTypeGeoKey set to PixelIsArea (the corner convention [`write`] uses); otherwise that
+/// key alone. Version 1.1.0; entries sorted by key id, as the GeoTIFF specification requires.
+fn directory(crs: &crate::Crs) -> Vec<u16> {
+    let mut entries: Vec<[u16; 4]> = crs.geokeys.as_ref().map_or(Vec::new(), |(keys, _, _)| {
+        let count = keys.get(3).map_or(0, |&n| usize::from(n));
+        let body = keys.get(4..).unwrap_or(&[]);
+        body.chunks_exact(4).take(count).map(|k| [k[0], k[1], k[2], k[3]]).collect()
+    });
+    entries.retain(|e| e[0] != RASTER_TYPE_KEY);
+    entries.push([RASTER_TYPE_KEY, 0, 1, 1]);
+    entries.sort_by_key(|e| e[0]);
+    let mut out = vec![1, 1, 0, entries.len() as u16];
+    out.extend(entries.iter().flatten());
+    out
 }
 
 /// Writes `raster` as a single-band 64-bit float GeoTIFF (uncompressed, PixelIsArea, with
@@ -188,9 +217,16 @@ pub fn write(raster: &Raster, path: &Path) -> Result<(), DemError> {
     let d = image.encoder();
     d.write_tag(Tag::ModelPixelScaleTag, &[c, c, 0.0][..]).map_err(fail)?;
     d.write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, west, north, 0.0][..]).map_err(fail)?;
-    // GeoKeyDirectory: version 1.1.0, one key: GTRasterTypeGeoKey = PixelIsArea
-    d.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 1, RASTER_TYPE_KEY, 0, 1, 1][..])
-        .map_err(fail)?;
+    // GeoKeyDirectory: the CRS's keys with GTRasterTypeGeoKey = PixelIsArea
+    d.write_tag(Tag::GeoKeyDirectoryTag, &directory(raster.crs())[..]).map_err(fail)?;
+    if let Some((_, doubles, ascii)) = &raster.crs().geokeys {
+        if !doubles.is_empty() {
+            d.write_tag(Tag::GeoDoubleParamsTag, &doubles[..]).map_err(fail)?;
+        }
+        if !ascii.is_empty() {
+            d.write_tag(Tag::GeoAsciiParamsTag, ascii.as_str()).map_err(fail)?;
+        }
+    }
     if let Some(nd) = raster.nodata() {
         d.write_tag(Tag::GdalNodata, format!("{nd:?}").as_str()).map_err(fail)?;
     }

@@ -14,6 +14,7 @@ pub const MAX_STATIONS: usize = 10_000_000;
 /// the northern row (the first in an ASCII grid or a GeoTIFF), column 0 the western one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Raster {
+    crs: Crs,
     file: String,
     cols: usize,
     rows: usize,
@@ -36,6 +37,24 @@ pub struct Station {
     pub y: f64,
     /// ground height (m).
     pub z: f64,
+}
+
+/// A raster's coordinate reference system, as its file stated it, kept to be written again with
+/// what is drawn on its frame. Not interpreted (no projection library): carried.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Crs {
+    /// a GeoTIFF's GeoKeys: the `GeoKeyDirectoryTag` shorts (its header and entries), the
+    /// `GeoDoubleParamsTag` values and the `GeoAsciiParamsTag` text they point into.
+    pub geokeys: Option<(Vec<u16>, Vec<f64>, String)>,
+    /// the WKT of the `.prj` beside an ESRI ASCII grid.
+    pub wkt: Option<String>,
+}
+
+impl Crs {
+    /// true when the file stated none.
+    pub fn is_empty(&self) -> bool {
+        self.geokeys.is_none() && self.wkt.is_none()
+    }
 }
 
 impl Raster {
@@ -77,7 +96,29 @@ impl Raster {
                 problem: format!("corner ({west}, {north}) is not a finite map point"),
             });
         }
-        Ok(Self { file: file.into(), cols, rows, cell, west, north, z, nodata })
+        Ok(Self {
+            crs: Crs::default(),
+            file: file.into(),
+            cols,
+            rows,
+            cell,
+            west,
+            north,
+            z,
+            nodata,
+        })
+    }
+
+    /// the coordinate reference system it came with (none for a raster made in memory).
+    pub fn crs(&self) -> &Crs {
+        &self.crs
+    }
+
+    /// the raster with `crs` as its coordinate reference system: what [`crate::geotiff::write`]
+    /// and [`crate::ascii::write`] write with it (a map drawn on a DEM's frame takes the DEM's).
+    pub fn with_crs(mut self, crs: Crs) -> Self {
+        self.crs = crs;
+        self
     }
 
     /// the file the raster came from.

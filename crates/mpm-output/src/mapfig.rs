@@ -9,7 +9,10 @@ use plotters::prelude::*;
 
 use crate::OutputError;
 use crate::atomic;
-use crate::outline::{polygons, rings};
+use crate::outline::{area2, polygons, rings};
+
+/// The fewest cells of a patch (or a hole) whose outline the figure draws.
+pub const MIN_PATCH: i64 = 4;
 
 /// What the figure is drawn from: rasters of `cols` × `rows` cells of `cell` m, row 0 the
 /// northern one, whose north-west corner is at map `corner`.
@@ -162,10 +165,15 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
                 level += step;
             }
         }
-        // the outlines
+        // the outlines, without the patches and holes of fewer than MIN_PATCH cells (isolated
+        // grains, which `outlines.geojson` keeps)
         for (mask, colour) in [(f.release, RGBColor(20, 60, 200)), (f.deposit, BLACK)] {
             for polygon in polygons(rings(mask, f.cols, f.rows)) {
-                for ring in polygon {
+                let big = |ring: &Vec<(i64, i64)>| area2(ring).abs() >= 2 * MIN_PATCH;
+                if !big(&polygon[0]) {
+                    continue;
+                }
+                for ring in polygon.into_iter().filter(big) {
                     let points: Vec<(i32, i32)> = ring
                         .iter()
                         .map(|&(c, s)| {

@@ -1,7 +1,8 @@
 //! The hazard maps of a 3D run (`[output] hazard_maps = true`): one raster per quantity of
 //! [`mpm_scene::plan::PlanEnvelope`], each written as an ESRI ASCII grid (`maps/NAME.asc`) and a
-//! GeoTIFF (`maps/NAME.tif`), in the plan frame that module states (map x = x, map y = −z; no
-//! CRS: a regular grid has no georeference).
+//! GeoTIFF (`maps/NAME.tif`), in the plan frame that module states (map x = x, map y = −z), with
+//! the DEM's coordinate reference system on a terrain grid (none on a regular grid); and the
+//! outlines (`maps/outlines.geojson`) and the figure (`maps/hazard_map.png`) drawn from them.
 
 use std::path::Path;
 
@@ -24,8 +25,15 @@ pub const MAPS: [(&str, &str); 7] = [
     ("deposit_depth", "final deposit depth (m)"),
 ];
 
-/// writes every map of `plan` and the final `deposit` depths into `dir/maps/`.
-pub fn write(dir: &Path, plan: &PlanEnvelope, deposit: &[f64]) -> Result<(), OutputError> {
+/// writes every map of `plan` and the final `deposit` depths into `dir/maps/`, with the
+/// coordinate reference system `crs` (the DEM's: its GeoKeys into the GeoTIFFs, its `.prj`
+/// beside the ESRI ASCII grids).
+pub fn write(
+    dir: &Path,
+    plan: &PlanEnvelope,
+    deposit: &[f64],
+    crs: &mpm_dem::Crs,
+) -> Result<(), OutputError> {
     let maps = dir.join("maps");
     std::fs::create_dir_all(&maps)
         .map_err(|source| OutputError::Io { path: maps.clone(), source })?;
@@ -51,14 +59,24 @@ pub fn write(dir: &Path, plan: &PlanEnvelope, deposit: &[f64]) -> Result<(), Out
             nodata,
         )
         .map_err(|e| fail(&maps.join(name), e))?;
-        for (ext, write) in [
-            ("asc", mpm_dem::ascii::write as fn(&Raster, &Path) -> Result<(), mpm_dem::DemError>),
-            ("tif", mpm_dem::geotiff::write),
+        // the GeoTIFF carries the GeoKeys; the grid's `.prj` is written here, atomically, and
+        // not by the grid's writer (which would put it beside the temporary name)
+        let tif = raster.clone().with_crs(mpm_dem::Crs { wkt: None, ..crs.clone() });
+        if let Some(wkt) = &crs.wkt {
+            crate::atomic::write(&maps.join(format!("{name}.prj")), wkt.as_bytes())?;
+        }
+        for (ext, raster, write) in [
+            (
+                "asc",
+                &raster,
+                mpm_dem::ascii::write as fn(&Raster, &Path) -> Result<(), mpm_dem::DemError>,
+            ),
+            ("tif", &tif, mpm_dem::geotiff::write),
         ] {
             // under a temporary name, then renamed: a crash leaves no truncated map
             let path = maps.join(format!("{name}.{ext}"));
             let tmp = crate::atomic::temp_path(&path);
-            write(&raster, &tmp).map_err(|e| {
+            write(raster, &tmp).map_err(|e| {
                 let _ = std::fs::remove_file(&tmp);
                 fail(&path, e)
             })?;
@@ -147,7 +165,14 @@ mod tests {
         }
         let deposit: Vec<f64> = (0..12).map(|k| 0.01 * k as f64).collect();
         let dir = std::env::temp_dir().join(format!("mpm-maps-{}", std::process::id()));
-        write(&dir, &plan, &deposit).unwrap();
+        // the DEM's CRS: a projected one (GTModelTypeGeoKey 1024 = 1, ProjectedCSTypeGeoKey
+        // 3072 = EPSG 32633, a citation in the ASCII parameters) and a `.prj`
+        let keys = vec![1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 2, 3072, 0, 1, 32633];
+        let crs = mpm_dem::Crs {
+            geokeys: Some((keys, Vec::new(), "WGS 84 / UTM zone 33N|".into())),
+            wkt: Some("PROJCS[\"WGS_1984_UTM_Zone_33N\"]".into()),
+        };
+        write(&dir, &plan, &deposit, &crs).unwrap();
         for ext in ["asc", "tif"] {
             let read = |name: &str| {
                 let path = dir.join("maps").join(format!("{name}.{ext}"));
@@ -166,7 +191,27 @@ mod tests {
                 }
             }
             assert_eq!(a.nodata(), Some(NODATA), "{ext}");
+            // the CRS copied: the GeoKeys with the raster type set to PixelIsArea (1025 = 1,
+            // the corner convention the writer uses; the DEM said PixelIsPoint), the `.prj`
+            let expected = match ext {
+                "tif" => mpm_dem::Crs {
+                    geokeys: Some((
+                        vec![1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 1, 3072, 0, 1, 32633],
+                        Vec::new(),
+                        "WGS 84 / UTM zone 33N|".into(),
+                    )),
+                    wkt: None,
+                },
+                _ => mpm_dem::Crs { geokeys: None, wkt: crs.wkt.clone() },
+            };
+            assert_eq!(h.crs(), &expected, "{ext}");
         }
+        let leftovers: Vec<_> = std::fs::read_dir(dir.join("maps"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('.'))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -85,7 +85,7 @@ fn simplify(ring: Vec<Vertex>) -> Vec<Vertex> {
 }
 
 /// twice the signed area of a closed ring (> 0 counter-clockwise).
-fn area2(ring: &[Vertex]) -> i64 {
+pub(crate) fn area2(ring: &[Vertex]) -> i64 {
     ring.windows(2).map(|w| w[0].0 * w[1].1 - w[1].0 * w[0].1).sum()
 }
 

@@ -712,7 +712,7 @@ impl<'a> SpaceDriver<'a> {
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
             if let (Some(e), Some((depth, _))) = (&self.plan, &deposit) {
-                maps::write(dir, e, depth)?;
+                maps::write(dir, e, depth, &scene.output.crs)?;
                 let centre = |k: usize| e.cell * (k as f64 + 0.5);
                 let ground: Vec<f64> = (0..e.rows * e.cols)
                     .map(|k| {

@@ -418,6 +418,17 @@ observed = { deposit = "plane.asc" }
     assert!((o.area_iou.unwrap() - covered / 253.0).abs() < 1e-12, "{o:?} {covered}");
     let maps = std::fs::read_to_string(whole_dir.join("maps/max_height.asc")).unwrap();
     assert!(maps.contains("xllcorner 500.125") && maps.contains("yllcorner 800.125"), "{maps}");
+    // the deposit outline covers the summary's deposit area; the figure is drawn
+    let outlines = std::fs::read_to_string(whole_dir.join("maps/outlines.geojson")).unwrap();
+    let tag = "\"name\":\"deposit\",\"area_m2\":";
+    let at = outlines.find(tag).expect("a deposit feature") + tag.len();
+    let area: f64 = outlines[at..].split(['}', ',']).next().unwrap().parse().unwrap();
+    assert_eq!(area, whole.hazard_maps.unwrap().deposit_area);
+    assert!(whole_dir.join("maps/hazard_map.png").is_file());
+    // the ground's load: pressed (3D: in N)
+    let ground = &whole.walls[0];
+    assert_eq!((ground.name.as_str(), ground.unit.as_str()), ("ground", "N"));
+    assert!(ground.normal_impulse > 0.0 && ground.impulse.len() == 3, "{ground:?}");
     let stopped = mpm_run::run_space_scene(
         &scene,
         &RunOptions {

@@ -151,6 +151,9 @@ pub struct SpaceOutput {
     /// an observed deposit to compare the run's with (`[output] observed = { deposit =
     /// "depth.asc" }`): the file as the scene names it and its raster of vertical depths.
     pub observed: Option<(String, mpm_dem::Raster)>,
+    /// the coordinate reference system of a terrain grid's DEM, which the maps are written
+    /// with (none on a regular grid, or when the DEM's file states none).
+    pub crs: mpm_dem::Crs,
 }
 
 /// One 3D material point before the constitutive state is attached.

@@ -75,7 +75,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let gravity = gravity(ctx, &f)?;
     // the settings the dimensions share (gravity, 3 components here, was read above)
     let settings = solver::settings(ctx, &SolverSpec { gravity: None, ..f.solver.clone() })?;
-    let (grid, surface) = grid(ctx, &f)?;
+    let (grid, surface, crs) = grid(ctx, &f)?;
     let shape_function = f
         .solver
         .shape_function
@@ -120,7 +120,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
         }
     }
     let initial_dt = first_dt(ctx, &f, &config, &grid, &materials, &seeds, settings.max_steps)?;
-    let output = output(ctx, &f, &grid)?;
+    let output = SpaceOutput { crs, ..output(ctx, &f, &grid)? };
     let warnings = plausible::space_warnings(ctx, &f, gravity.length())?;
     let runout_direction = runout_direction(ctx, &f, gravity)?;
     Ok(SpaceScene {
@@ -189,7 +189,10 @@ fn gravity(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Vector, SceneError> {
 
 /// `[grid]`: regular (cubic cells, a positive count along each axis) or terrain (over a DEM);
 /// each kind's fields only.
-fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<(SpaceGrid, Option<TerrainGrid>), SceneError> {
+/// The grid, the ground before a release was cut into it (if one was), and the DEM's CRS.
+type Grids = (SpaceGrid, Option<TerrainGrid>, mpm_dem::Crs);
+
+fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Grids, SceneError> {
     let g = &f.grid;
     let regular_fields = [
         ("grid.origin", g.origin.is_some()),
@@ -216,13 +219,13 @@ fn grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<(SpaceGrid, Option<TerrainGrid>)
                      and `plan_cell`, its layers from `layer_height` and `layers`",
                 ));
             }
-            terrain_grid(ctx, f).map(|(t, surface)| (SpaceGrid::Terrain(t), surface))
+            terrain_grid(ctx, f).map(|(t, surface, crs)| (SpaceGrid::Terrain(t), surface, crs))
         }
         GridKind::Regular => {
             if let Some((path, _)) = terrain_fields.iter().find(|(_, here)| *here) {
                 return Err(ctx.foreign(path, "it belongs to `kind = \"terrain\"`"));
             }
-            regular_grid(ctx, f).map(|g| (SpaceGrid::Regular(g), None))
+            regular_grid(ctx, f).map(|g| (SpaceGrid::Regular(g), None, mpm_dem::Crs::default()))
         }
     }
 }
@@ -286,7 +289,7 @@ fn regular_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError>
 fn terrain_grid(
     ctx: &Ctx<'_>,
     f: &SpaceFile,
-) -> Result<(TerrainGrid, Option<TerrainGrid>), SceneError> {
+) -> Result<(TerrainGrid, Option<TerrainGrid>, mpm_dem::Crs), SceneError> {
     let g = &f.grid;
     let why = "a terrain grid";
     let dem = g.dem.as_deref().ok_or_else(|| ctx.missing("grid.dem", why, "\"valley.asc\""))?;
@@ -459,7 +462,7 @@ fn terrain_grid(
         })
     };
     let surface = if cut { Some(build(surface)?) } else { None };
-    Ok((build(heights)?, surface))
+    Ok((build(heights)?, surface, raster.crs().clone()))
 }
 
 /// The release body's particles: in columns on a plan lattice of spacing `s`, from the grid's
@@ -1106,6 +1109,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
         plots: o.plots.unwrap_or(true),
         checkpoint_interval: o.checkpoint_interval,
         hazard_maps,
+        crs: mpm_dem::Crs::default(),
     })
 }
 
