@@ -166,24 +166,54 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
         Some(&v) => v,
         None => d,
     });
-    let doubles: Vec<f64> = d
-        .find_tag(Tag::GeoDoubleParamsTag)
-        .map_err(tiff)?
-        .and_then(|v| v.into_f64_vec().ok())
-        .unwrap_or_default();
-    let ascii = match d.find_tag(Tag::GeoAsciiParamsTag).map_err(tiff)? {
+    // The CRS is carried, not used: a parameter tag that cannot be read (or written again: the
+    // TIFF writer takes ASCII text only) is left out with the keys that point into it, and
+    // never fails the read.
+    let doubles: Option<Vec<f64>> =
+        d.find_tag(Tag::GeoDoubleParamsTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
+    let ascii: Option<String> = d
+        .find_tag(Tag::GeoAsciiParamsTag)
+        .ok()
+        .flatten()
+        .and_then(|v| v.into_string().ok())
         // (without the terminating NUL, which writing adds again)
-        Some(v) => v.into_string().unwrap_or_default().trim_end_matches('\0').to_string(),
-        None => String::new(),
-    };
-    let crs =
-        crate::Crs { geokeys: (keys.len() >= 4).then_some((keys, doubles, ascii)), wkt: None };
+        .map(|t| t.trim_end_matches('\0').to_string())
+        .filter(|t| t.is_ascii() && !t.contains('\0'));
+    let crs = crate::Crs { geokeys: carried_keys(keys, doubles, ascii), wkt: None };
     Ok(Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)?.with_crs(crs))
+}
+
+/// The GeoKeys to carry from a directory `keys` and its parameter tags: every key whose value
+/// is inline or in a parameter tag that was read, in the directory's order (a key whose values
+/// lie inside the directory itself, location 34735, is left out: rare, and its offset would not
+/// survive the directory being rebuilt). `None` without a directory.
+fn carried_keys(
+    keys: Vec<u16>,
+    doubles: Option<Vec<f64>>,
+    ascii: Option<String>,
+) -> Option<(Vec<u16>, Vec<f64>, String)> {
+    let header = keys.get(..4)?;
+    let count = usize::from(header[3]);
+    let entries: Vec<&[u16]> = keys[4..].chunks_exact(4).take(count).collect();
+    let (doubles, ascii) = (doubles.unwrap_or_default(), ascii.unwrap_or_default());
+    let fits = |e: &[u16], len: usize| usize::from(e[3]) + usize::from(e[2]) <= len;
+    let kept: Vec<&[u16]> = entries
+        .into_iter()
+        .filter(|e| match e[1] {
+            0 => true,
+            34736 => fits(e, doubles.len()),
+            34737 => fits(e, ascii.len()),
+            _ => false,
+        })
+        .collect();
+    let mut out = vec![header[0], header[1], header[2], kept.len() as u16];
+    out.extend(kept.into_iter().flatten());
+    Some((out, doubles, ascii))
 }
 
 /// The GeoKeyDirectory a written raster carries: its CRS's keys, if it has any, with
 /// GTRasterTypeGeoKey set to PixelIsArea (the corner convention [`write`] uses); otherwise that
-/// key alone. Version 1.1.0; entries sorted by key id, as the GeoTIFF specification requires.
+/// key alone. Entries sorted by key id, as the GeoTIFF specification requires.
 fn directory(crs: &crate::Crs) -> Vec<u16> {
     let mut entries: Vec<[u16; 4]> = crs.geokeys.as_ref().map_or(Vec::new(), |(keys, _, _)| {
         let count = keys.get(3).map_or(0, |&n| usize::from(n));
@@ -193,7 +223,9 @@ fn directory(crs: &crate::Crs) -> Vec<u16> {
     entries.retain(|e| e[0] != RASTER_TYPE_KEY);
     entries.push([RASTER_TYPE_KEY, 0, 1, 1]);
     entries.sort_by_key(|e| e[0]);
-    let mut out = vec![1, 1, 0, entries.len() as u16];
+    // the source's version and revision (GeoTIFF 1.0 or 1.1), 1.1.0 for a raster made here
+    let version = crs.geokeys.as_ref().and_then(|(k, _, _)| k.get(..3)).unwrap_or(&[1, 1, 0]);
+    let mut out = vec![version[0], version[1], version[2], entries.len() as u16];
     out.extend(entries.iter().flatten());
     out
 }
@@ -231,4 +263,34 @@ pub fn write(raster: &Raster, path: &Path) -> Result<(), DemError> {
         d.write_tag(Tag::GdalNodata, format!("{nd:?}").as_str()).map_err(fail)?;
     }
     image.write_data(raster.heights()).map_err(fail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The keys carried: inline ones and those whose parameters were read; a key into a tag that
+    /// could not be read, or into the directory itself, is left out; the version is the source's.
+    #[test]
+    fn keys_are_carried_only_with_their_parameters() {
+        let keys = vec![
+            1, 1, 1, 4, //
+            1024, 0, 1, 1, // model type: inline
+            2049, 34737, 10, 0, // a citation in the ASCII parameters
+            2057, 34736, 1, 0, // a semi-major axis in the double parameters
+            4096, 34735, 2, 20, // values inside the directory
+        ];
+        let (k, d, a) =
+            carried_keys(keys.clone(), Some(vec![6_378_137.0]), Some("WGS 84 / x|".into()))
+                .unwrap();
+        assert_eq!(k, [1, 1, 1, 3, 1024, 0, 1, 1, 2049, 34737, 10, 0, 2057, 34736, 1, 0]);
+        assert_eq!((d.len(), a.len()), (1, 11));
+        // neither parameter tag read (not ASCII, say): the inline key alone
+        let (k, _, _) = carried_keys(keys, None, None).unwrap();
+        assert_eq!(k, [1, 1, 1, 1, 1024, 0, 1, 1]);
+        assert_eq!(carried_keys(vec![1, 1], None, None), None);
+        // written: the raster type added in order, the version kept
+        let crs = crate::Crs { geokeys: Some((k, Vec::new(), String::new())), wkt: None };
+        assert_eq!(directory(&crs), [1, 1, 1, 2, 1024, 0, 1, 1, RASTER_TYPE_KEY, 0, 1, 1]);
+    }
 }

@@ -10,13 +10,14 @@ pub const LOCK_FILE: &str = ".mpm.lock";
 
 /// The files a run writes into its output directory (besides `frames/particles_*.vtp` and
 /// temporary `.NAME.tmp-PID.EXT` files): what `--force` removes.
-const RUN_FILES: [&str; 15] = [
+const RUN_FILES: [&str; 18] = [
     "scene.toml",
     "summary.json",
     "particles.pvd",
     "energy.csv",
     "probes.csv",
     "runout.csv",
+    "walls.csv",
     "envelope.csv",
     "deposit.csv",
     "section.geojson",
@@ -26,6 +27,8 @@ const RUN_FILES: [&str; 15] = [
     "plots/runout.png",
     "plots/deposit.png",
     "plots/envelope.png",
+    "maps/outlines.geojson",
+    "maps/hazard_map.png",
 ];
 
 /// One run per output directory: a lock file created atomically (a hard link of a file that
@@ -196,11 +199,11 @@ fn remove_run_files(dir: &Path) {
         let _ = std::fs::remove_file(dir.join(name));
     }
     for (name, _) in crate::maps::MAPS {
-        for ext in ["asc", "tif"] {
+        for ext in ["asc", "tif", "prj"] {
             let _ = std::fs::remove_file(dir.join("maps").join(format!("{name}.{ext}")));
         }
     }
-    for sub in [dir.to_path_buf(), dir.join("frames"), dir.join("plots")] {
+    for sub in [dir.to_path_buf(), dir.join("frames"), dir.join("plots"), dir.join("maps")] {
         let Ok(entries) = std::fs::read_dir(&sub) else { continue };
         for e in entries.flatten() {
             let name = e.file_name().to_string_lossy().into_owned();

@@ -49,10 +49,10 @@ impl WallSeries {
     /// why the series cannot be one a run wrote (a checkpoint's, decoded), if it cannot: a
     /// dimension of 2 or 3, and every row and the last sample one entry per boundary.
     pub fn malformed(&self) -> Option<String> {
-        let width = self.boundaries.len() * (2 + self.dim);
         if !(self.dim == 2 || self.dim == 3) {
             return Some(format!("a wall-load series of dimension {}", self.dim));
         }
+        let width = self.boundaries.len() * (2 + self.dim);
         let bad_row = self.rows.iter().any(|(_, v)| v.len() != width);
         let bad_last = self.last.as_ref().is_some_and(|(_, l)| l.len() != self.boundaries.len());
         (bad_row || bad_last).then(|| {

@@ -91,7 +91,8 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
     crate::plots::register_font();
     let fail = |e: String| OutputError::Io { path: path.into(), source: std::io::Error::other(e) };
     let n = f.cols * f.rows;
-    if f.cols < 2 || f.rows < 2 || [f.ground.len(), f.height.len()] != [n, n] {
+    let lengths = [f.ground.len(), f.height.len(), f.release.len(), f.deposit.len()];
+    if f.cols == 0 || f.rows == 0 || lengths != [n; 4] {
         return Err(fail(format!("a {} × {} map with mismatched rasters", f.cols, f.rows)));
     }
     // pixels per cell: the map about 900 px across its longer side
@@ -230,9 +231,10 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
                 .map_err(e)?;
             root.draw(&Text::new(name, (lx + 24, y - 7), text(12))).map_err(e)?;
         }
-        let y = ly + lh + 56;
-        let contour = format!("contours {} m", nice(((hi - lo) / 12.0).max(1e-9)));
-        root.draw(&Text::new(contour, (lx, y), text(11))).map_err(e)?;
+        if hi > lo {
+            let contour = format!("contours {} m", nice((hi - lo) / 12.0));
+            root.draw(&Text::new(contour, (lx, ly + lh + 56), text(11))).map_err(e)?;
+        }
         root.present().map_err(|e| e.to_string())
     })();
     match drawn {

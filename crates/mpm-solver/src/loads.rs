@@ -5,7 +5,9 @@
 //!
 //! Each boundary node's contact impulse (eqs 14–18, [`mpm_contact::apply_all`]) goes to the
 //! boundary that carried it; a node held by several (a wall's foot on the ground, a corner) is
-//! divided by [`mpm_contact::impulse_shares`]. The impulses of the ghost nodes behind a fixed side
+//! divided by [`mpm_contact::impulse_shares`] (under the consistent mass matrix, whose reactions
+//! are formed after its re-solve, such a node's reaction goes whole to its first held plane's
+//! boundary). The impulses of the ghost nodes behind a fixed side
 //! (wide stencils) go to that side. The loads therefore add up to
 //! [`crate::Solver::boundary_impulse`], the total that the momentum balance checks.
 

@@ -178,7 +178,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let boundaries = crate::SIDES + config.walls.len();
         let loads = match checkpoint.loads {
-            l if l.is_empty() => vec![crate::BoundaryLoad::default(); boundaries],
+            // (a new run's; a run under way carries its loads)
+            l if l.is_empty() && checkpoint.step == 0 => {
+                vec![crate::BoundaryLoad::default(); boundaries]
+            }
             l if l.len() == boundaries && l.iter().all(crate::BoundaryLoad::is_finite) => l,
             l => {
                 return Err(SolverError::InvalidSetting {

@@ -87,8 +87,10 @@ fn tie_fixed_ghosts<F, const N: usize>(
 
 /// the side a ghost node's mirror plane of normal `normal` belongs to, with that normal.
 pub(crate) fn mirror_source(planes: &[NodePlane], normal: Vector) -> (u16, Vector) {
-    let source = planes.iter().find(|p| p.wall.normal() == normal).map_or(0, |p| p.source);
-    (source, normal)
+    // (the mirror plane is one of the node's side planes; else its first held plane's side)
+    let plane = planes.iter().find(|p| p.wall.normal() == normal);
+    let plane = plane.or_else(|| planes.iter().find(|p| p.held)).or(planes.first());
+    (plane.map_or(0, |p| p.source), normal)
 }
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
