@@ -55,6 +55,47 @@ fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
     }
 }
 
+/// The main mass of a 3D run in plan: the particles (indices into `positions`) of the heaviest
+/// set of plan cells of side `column` (in x and z) joined by an edge or a corner; the first such
+/// set in cell order on a tie. Empty without a finite position.
+fn main_mass_in_plan(positions: &[Vector], mass: &[f64], column: f64) -> Vec<usize> {
+    use std::collections::{HashMap, HashSet};
+    let key = |p: &Vector| ((p.x / column).floor() as i64, (p.z / column).floor() as i64);
+    let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (q, p) in positions.iter().enumerate().filter(|(_, p)| p.is_finite()) {
+        cells.entry(key(p)).or_default().push(q);
+    }
+    let mut order: Vec<(i64, i64)> = cells.keys().copied().collect();
+    order.sort_unstable();
+    let mut seen = HashSet::new();
+    let mut best: (f64, Vec<usize>) = (f64::NEG_INFINITY, Vec::new());
+    for start in order {
+        if !seen.insert(start) {
+            continue;
+        }
+        let (mut stack, mut members, mut total) = (vec![start], Vec::new(), 0.0);
+        while let Some((i, k)) = stack.pop() {
+            for &q in &cells[&(i, k)] {
+                members.push(q);
+                total += mass[q];
+            }
+            for di in -1..=1 {
+                for dk in -1..=1 {
+                    let next = (i + di, k + dk);
+                    if cells.contains_key(&next) && seen.insert(next) {
+                        stack.push(next);
+                    }
+                }
+            }
+        }
+        if total > best.0 {
+            best = (total, members);
+        }
+    }
+    best.1.sort_unstable();
+    best.1
+}
+
 /// the solver's boundary loads as the output's samples.
 fn load_samples(loads: &[mpm_solver3d::BoundaryLoad]) -> Vec<LoadSample> {
     loads
@@ -503,6 +544,28 @@ impl<'a> SpaceDriver<'a> {
         let com =
             keep.iter().map(|&q| p.position[q] * p.mass[q]).sum::<mpm_solver3d::Vector>() / total;
         m.com_travel = (com - self.com0).length();
+        // The main mass in plan: the section rule above splits the particles sorted along d at
+        // gaps wider than a column, but in 3D the grains beside those thrown ahead close such
+        // gaps (the flume extruded: 4.19 m against 3.42 m in 2D). Its front, tail and front
+        // speed are taken from the heaviest set of plan cells joined by an edge or a corner.
+        let column = self.scene.grid.plan_cell();
+        let plan: Vec<mpm_solver3d::Vector> = keep.iter().map(|&q| p.position[q]).collect();
+        let main = main_mass_in_plan(&plan, &mass, column);
+        if !main.is_empty() {
+            let half = 0.5 * self.spacing;
+            let (lo, hi) = main.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| {
+                (a.min(position[q].x), b.max(position[q].x))
+            });
+            m.front_x = hi + half;
+            m.tail_x = lo - half;
+            m.front_travel = m.front_x - self.runout.first().map_or(m.front_x, |i| i.front_x);
+            let (mut ms, mut momentum) = (0.0, DVec2::ZERO);
+            for &q in main.iter().filter(|&&q| position[q].x >= hi - column) {
+                ms += mass[q];
+                momentum += mass[q] * velocity[q];
+            }
+            m.front_speed = if ms > 0.0 { momentum.length() / ms } else { 0.0 };
+        }
         m
     }
 
@@ -840,4 +903,31 @@ fn observe<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         [&pick_f(&p.mass), &pick_f(&p.volume)],
         |x, z| scene.grid.ground(x, z),
     );
+}
+
+#[cfg(test)]
+mod plan_tests {
+    use super::*;
+
+    /// a block of 9 cells, a grain in the cell touching its corner (joined), a grain one empty
+    /// cell ahead (not joined), and a lighter block elsewhere: the main mass is the block and
+    /// the corner grain.
+    #[test]
+    fn the_main_mass_in_plan_joins_cells_by_edges_and_corners_only() {
+        let at = |x: f64, z: f64| Vector::new(x, 0.0, z);
+        let mut positions = Vec::new();
+        for i in 0..3 {
+            for k in 0..3 {
+                positions.push(at(0.5 + f64::from(i), 0.5 + f64::from(k)));
+            }
+        }
+        positions.push(at(3.5, 3.5)); // 9: the corner of cell (2, 2)
+        positions.push(at(4.5, 1.5)); // 10: cell (4, 1), one empty column ahead of (2, 1)
+        positions.push(at(10.5, 10.5)); // 11, 12: a lighter pair
+        positions.push(at(10.5, 11.5));
+        let mass = vec![1.0; positions.len()];
+        let main = main_mass_in_plan(&positions, &mass, 1.0);
+        assert_eq!(main, (0..10).collect::<Vec<_>>());
+        assert!(main_mass_in_plan(&[at(f64::NAN, 0.0)], &[1.0], 1.0).is_empty());
+    }
 }
