@@ -168,11 +168,11 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
         Err(e) => return rows.failed(&case, "run", &e),
     };
     let (ra, rb) = (&a.runout.last, &b.runout.last);
-    // The front is the farthest grain. The main mass's front (`front_x`: the end of the
-    // heaviest run of particles with no gap wider than a column) is no plane-strain measure:
-    // the 3D run has four particles across for each of the section's, and the grains thrown
-    // ahead, a column apart in the section, close the gaps in 3D (measured 3.42 m in 2D,
-    // 4.19 m in 3D; each z-layer's own section 3.40–3.68 m): it is reported, not compared.
+    // The front is the farthest grain. The main mass's front (`front_x`) is found by two
+    // rules: in 2D the end of the heaviest run of particles with no gap wider than a column, in
+    // 3D the heaviest set of plan cells joined by an edge or a corner. With the 2D rule in 3D
+    // the grains across closed the section's gaps (3.42 m in 2D, 4.19 m in 3D; each z-layer's
+    // own section 3.40–3.68 m); the rules differ, so it is reported, not compared.
     rows.rel(
         &case,
         "front: farthest grain (m)",
@@ -183,9 +183,9 @@ pub(super) fn rows(rows: &mut Rows, quick: bool) {
     );
     rows.info(
         &case,
-        "main mass's front, gap rule (m)",
+        "main mass's front (m)",
         &format!("{:.4} (2D)", ra.front_x),
-        "reported: 4 grains across per section grain close the gaps",
+        "reported: 2D gaps along x, 3D joined plan cells",
         format!("{:.4}", rb.front_x),
     );
     equivalence_rows(rows, &case, "the 2D flume", (&a, &b), width);
