@@ -276,6 +276,41 @@ fn shear<M: TangentModel>(
     run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
 }
 
+/// Drained triaxial compression (`eps_axial_end < 0`) or extension (`> 0`) along y: `ε_yy`
+/// prescribed from 0 in `n_steps` equal steps, the lateral stresses `σ_xx` and `σ_zz` held at
+/// their start values (`sigma0`, e.g. an isotropic confining stress), shear strains zero.
+pub fn triaxial<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    eps_axial_end: f64,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let n = n_steps.max(1) as f64;
+    let control = MixedControl {
+        stress_controlled: [true, false, true, false, false, false],
+        increment: [0.0, eps_axial_end / n, 0.0, 0.0, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
+    };
+    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+}
+
+/// One-dimensional (oedometric, K0) compression along y: `ε_yy` prescribed from 0 in `n_steps`
+/// equal steps, every other strain component held at zero (fully strain controlled).
+pub fn oedometric<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    eps_yy_end: f64,
+    n_steps: usize,
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    let n = n_steps.max(1) as f64;
+    let control = MixedControl {
+        stress_controlled: [false; 6],
+        increment: [0.0, eps_yy_end / n, 0.0, 0.0, 0.0, 0.0],
+        dt: QUASI_STATIC_STEP,
+    };
+    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+}
+
 /// Isotropic compression (`eps_v_end < 0`) or extension (`> 0`): `ε_xx = ε_yy = ε_zz = ε_v/3`
 /// prescribed, shear strains zero (fully strain controlled, so it also runs past the apex).
 pub fn isotropic<M: TangentModel>(
@@ -354,17 +389,46 @@ fn solve_block(t: &Tangent, ctrl: &[usize], rhs: impl Fn(usize) -> f64) -> Optio
         .fold(0.0f64, |m, (r, c)| m.max(a[(r, c)].abs()));
     // pivots below this are rounding noise of the block entries.
     let tiny = norm * 1e-13;
+    let b = faer::Mat::<f64>::from_fn(n, 1, |r, _| rhs(ctrl[r]));
     let lu = a.partial_piv_lu();
     let u = lu.U();
-    if (0..n).any(|k| u[(k, k)].abs() <= tiny || !u[(k, k)].is_finite()) {
-        return None;
-    }
-    let y = lu.solve(faer::Mat::<f64>::from_fn(n, 1, |r, _| rhs(ctrl[r])));
+    let y = if (0..n).any(|k| u[(k, k)].abs() <= tiny || !u[(k, k)].is_finite()) {
+        min_norm(&a, &b, tiny)?
+    } else {
+        lu.solve(&b)
+    };
     let mut dx = [0.0; 6];
     for (r, &i) in ctrl.iter().enumerate() {
         dx[i] = y[(r, 0)];
     }
     dx.iter().all(|v| v.is_finite()).then_some(dx)
+}
+
+/// The minimum-norm solution of a singular block `A x = b` (through its SVD, singular values
+/// below `tiny` dropped) when `b` lies in its range to 1e-9 — a stress-controlled pair held
+/// on a perfectly plastic corner (triaxial compression on Mohr–Coulomb's edge: the two lateral
+/// strains are free along the edge, the symmetric split is the least one); `None` when `b` is
+/// outside the range (no strain reaches the targets).
+fn min_norm(a: &faer::Mat<f64>, b: &faer::Mat<f64>, tiny: f64) -> Option<faer::Mat<f64>> {
+    let n = a.nrows();
+    let svd = a.thin_svd().ok()?;
+    let (u, v, s) = (svd.U(), svd.V(), svd.S().column_vector());
+    let mut x = faer::Mat::<f64>::zeros(n, 1);
+    for k in 0..n {
+        if s[k].is_nan() || s[k] <= tiny {
+            continue;
+        }
+        let coef = (0..n).map(|r| u[(r, k)] * b[(r, 0)]).sum::<f64>() / s[k];
+        for r in 0..n {
+            x[(r, 0)] += v[(r, k)] * coef;
+        }
+    }
+    let b_norm = (0..n).fold(0.0f64, |m, r| m.max(b[(r, 0)].abs()));
+    let residual = (0..n).fold(0.0f64, |m, r| {
+        let ax: f64 = (0..n).map(|c| a[(r, c)] * x[(c, 0)]).sum();
+        m.max((ax - b[(r, 0)]).abs())
+    });
+    (residual <= 1e-9 * b_norm).then_some(x)
 }
 
 #[cfg(test)]
@@ -414,7 +478,7 @@ mod tests {
     /// the controlled block of a known matrix is solved to rounding (1e-14 relative: a few ulps
     /// of a well-conditioned 3 × 3 system), and a singular block is refused, not divided by ~0.
     #[test]
-    fn solve_block_solves_the_controlled_block_and_refuses_a_singular_one() {
+    fn solve_block_solves_the_controlled_block_and_refuses_an_inconsistent_singular_one() {
         let mut t: Tangent = [[0.0; 6]; 6];
         for (i, row) in t.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
@@ -428,9 +492,15 @@ mod tests {
         for (g, w) in got.iter().zip(&want) {
             assert!((g - w).abs() <= 1e-14 * 2.0, "{got:?} vs {want:?}");
         }
-        // rows 0 and 2 made equal: the block is singular.
+        // rows 0 and 2 made equal: the block is singular; a right-hand side outside its
+        // range is refused, one inside gets the minimum-norm solution.
         t[2] = t[0];
-        assert!(solve_block(&t, &ctrl, |_| 1.0).is_none());
+        assert!(solve_block(&t, &ctrl, |i| if i == 2 { 2.0 } else { 1.0 }).is_none());
+        let got = solve_block(&t, &ctrl, |_| 1.0).expect("consistent singular block");
+        for &i in &ctrl {
+            let lhs: f64 = ctrl.iter().map(|&j| t[i][j] * got[j]).sum();
+            assert!((lhs - 1.0).abs() <= 1e-12, "row {i}: {lhs}");
+        }
     }
 
     #[test]

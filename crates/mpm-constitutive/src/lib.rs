@@ -29,6 +29,9 @@
 //!   and [`TangentModel`].
 //! - [`drucker_prager`]: [`DruckerPrager`] (eqs 23–25) with the cone/apex return mapping and
 //!   its consistent tangent.
+//! - [`mohr_coulomb`]: [`MohrCoulomb`], the pyramid of `(c, φ, ψ)` with no cone to choose, its
+//!   exact return in principal stresses (face, edge, apex), consistent tangent and softening;
+//!   [`principal`]: the principal decomposition it is written in.
 //! - [`mu_i`]: [`MuI`], the μ(I) rheology of dense granular flow (Jop, Forterre & Pouliquen
 //!   2006) as an elasto-viscoplastic, rate-dependent model that separates in tension.
 //! - [`element_test`]: single-point drivers with mixed stress/strain control (§6(3)).
@@ -65,7 +68,9 @@ pub mod elastic;
 pub mod element_test;
 pub mod error;
 pub mod model;
+pub mod mohr_coulomb;
 pub mod mu_i;
+pub mod principal;
 pub mod tensor;
 
 pub use drucker_prager::{
@@ -74,5 +79,6 @@ pub use drucker_prager::{
 pub use elastic::LinearElastic;
 pub use error::ConstitutiveError;
 pub use model::{Branch, ConstitutiveModel, MAX_BRANCHES, TangentModel, UpdateReport};
+pub use mohr_coulomb::{McBranch, McState, MohrCoulomb, MohrCoulombParams, MohrCoulombSoftening};
 pub use mu_i::{MuI, MuIBranch, MuIParams, MuIState};
 pub use tensor::{PlaneTensor, SymTensor, Symmetric, Tangent};

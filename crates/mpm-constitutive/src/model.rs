@@ -16,7 +16,7 @@ use crate::tensor::{PlaneTensor, SymTensor, Tangent};
 
 /// The most branches a model may name in [`ConstitutiveModel::BRANCHES`] (so that a solver can
 /// count them in a fixed array, without allocating per step).
-pub const MAX_BRANCHES: usize = 8;
+pub const MAX_BRANCHES: usize = 12;
 
 /// Which branch an update took: an index into the model's [`ConstitutiveModel::BRANCHES`], whose
 /// entry 0 is the elastic branch. A solver counts branches by this index and prints them by the
