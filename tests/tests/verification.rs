@@ -12,6 +12,7 @@ mod verification {
     pub mod manufactured;
     pub mod objectivity;
     pub mod open_core;
+    pub mod side_walls;
     pub mod small_mass;
     pub mod terrain3d;
     pub mod three_d;

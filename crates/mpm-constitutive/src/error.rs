@@ -16,6 +16,14 @@ pub enum ConstitutiveError {
         /// the admissible range, e.g. `"-1 < poisson < 0.5"`.
         range: &'static str,
     },
+    /// a parameter that the others given make necessary is absent.
+    #[error("parameter `{name}` is missing: {reason}")]
+    MissingParameter {
+        /// parameter name as spelled in the API.
+        name: &'static str,
+        /// why it is needed.
+        reason: &'static str,
+    },
     /// softening so strong that the return mapping has no unique solution.
     #[error(
         "hardening_modulus H = {hardening_modulus} Pa makes the return mapping ill posed \

@@ -37,8 +37,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// dissipation, the solver settings the PIC share and the separation density; 9: the history
 /// carries a 3D run's hazard maps; 10: the hazard maps no longer carry a floor height, the
 /// grid's ground gives it; 11: the solver state carries each boundary's loads, the history the
-/// wall-load series).
-pub const FORMAT: u32 = 11;
+/// wall-load series; 12: the dissipation and the energy rows carry the side walls' friction, the
+/// solver settings the side walls, the scene registry a Mohr–Coulomb run's state).
+pub const FORMAT: u32 = 12;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

@@ -327,7 +327,9 @@ impl Driver<'_> {
         if self.history.walls.is_none() {
             let (b, walls) = (&r.config.boundaries, r.config.walls.len());
             let sides = [b.ground, b.left_wall, b.right_wall].map(|s| s.is_some());
-            let boundaries = crate::loads::boundaries(&mpm_solver::SIDE_NAMES, &sides, walls);
+            let side_walls = r.config.side_walls().is_some();
+            let boundaries =
+                crate::loads::boundaries(&mpm_solver::SIDE_NAMES, &sides, walls, side_walls);
             if !boundaries.is_empty() {
                 self.history.walls = Some(WallSeries::new(boundaries, 2));
             }

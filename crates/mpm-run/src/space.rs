@@ -50,6 +50,7 @@ fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
         friction_work: l.friction_work,
         constraint_work: l.constraint_work,
         transfer_dissipation: l.transfer_dissipation,
+        side_wall_friction: l.side_wall_friction,
         external_work: l.external_work,
         residual: l.residual,
     }
@@ -602,7 +603,8 @@ impl<'a> SpaceDriver<'a> {
             let (b, walls) = (&self.scene.config.boundaries, self.scene.config.walls.len());
             let sides = [b.ground, b.left_wall, b.right_wall, b.back_wall, b.front_wall];
             let sides = sides.map(|s| s.is_some());
-            let boundaries = crate::loads::boundaries(&mpm_solver3d::SIDE_NAMES, &sides, walls);
+            let boundaries =
+                crate::loads::boundaries(&mpm_solver3d::SIDE_NAMES, &sides, walls, false);
             if !boundaries.is_empty() {
                 self.walls = Some(WallSeries::new(boundaries, 3));
             }

@@ -266,6 +266,25 @@ pub struct BoundariesSpec {
     /// `[[boundaries.walls]]`: walls anywhere (inclined, inside the domain), beside the grid's sides.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walls: Vec<WallSpec>,
+    /// the side walls of a channel across the plane (plane strain only): their width apart and
+    /// their friction, which acts through the out-of-plane stress σ_zz.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub side_walls: Option<SideWallsSpec>,
+}
+
+/// `side_walls = { width = W, friction_angle_deg = δ }` (or `friction = μ_w`): two parallel
+/// walls W apart across the plane of the section, each rubbing the material with μ_w |σ_zz|.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SideWallsSpec {
+    /// the channel's width between the walls (m).
+    pub width: f64,
+    /// the walls' friction coefficient μ_w.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// the walls' friction angle δ (degrees), μ_w = tan δ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction_angle_deg: Option<f64>,
 }
 
 /// One `[[boundaries.walls]]` entry: a straight wall from `from` to `to`, the material on its left

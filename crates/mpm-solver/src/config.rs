@@ -188,6 +188,20 @@ pub struct Periodic {
     pub length: Real,
 }
 
+/// The friction of two parallel side walls a distance `width` apart across the plane of a
+/// plane-strain run (a flume or channel of that width): each acts on the material with the
+/// traction `friction · |σ_zz|` against its in-plane velocity, a body force
+/// `2 friction |σ_zz| / width` per unit volume, applied at the nodes so that it stops a node
+/// but never reverses it (`stages/side_walls.rs`). Only compressive `σ_zz` presses on the
+/// walls. Plane strain only: in 3D the walls are faces of the grid or declared walls.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SideWalls {
+    /// the channel's width between the walls (m), > 0.
+    pub width: Real,
+    /// the walls' Coulomb friction coefficient μ_w = tan δ, ≥ 0.
+    pub friction: Real,
+}
+
 /// Settings of a run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverConfig {
@@ -208,6 +222,11 @@ pub struct SolverConfig {
     /// on its face or inside its solid (see `stages/locate.rs`).
     #[serde(default)]
     pub walls: Vec<Wall>,
+    /// Side walls across the plane of a plane-strain run (`None`: none, the paper's plane
+    /// strain). In the loads ([`crate::Solver::boundary_loads`]) they follow the declared walls.
+    #[cfg(not(feature = "dim3"))]
+    #[serde(default)]
+    pub side_walls: Option<SideWalls>,
     /// Nodes whose mass is below this fraction of the mean particle mass take no acceleration from
     /// internal force (the small-nodal-mass instability of §2(3)). Default 1e-4, which leaves
     /// MUSL and USAVG runs unchanged (their strains use remapped velocities). USL needs about 1e-2
@@ -261,6 +280,8 @@ impl Default for SolverConfig {
             boundaries: Boundaries::default(),
             periodic: None,
             walls: Vec::new(),
+            #[cfg(not(feature = "dim3"))]
+            side_walls: None,
             small_mass_ratio: DEFAULT_SMALL_MASS_RATIO,
             objective_stress: false,
             gravity_ramp: 0.0,
@@ -284,6 +305,21 @@ impl SolverConfig {
         } else {
             self.gravity
         }
+    }
+
+    /// the side walls of a plane-strain run (always `None` in 3D).
+    #[inline(always)]
+    pub fn side_walls(&self) -> Option<SideWalls> {
+        #[cfg(not(feature = "dim3"))]
+        return self.side_walls;
+        #[cfg(feature = "dim3")]
+        None
+    }
+
+    /// how many entries [`crate::Solver::boundary_loads`] has: the grid's sides, the declared
+    /// walls, and the side walls when there are some.
+    pub fn boundary_count(&self) -> usize {
+        crate::SIDES + self.walls.len() + usize::from(self.side_walls().is_some())
     }
 
     /// checks every setting's range; the error names the setting, its value and the admissible range.
@@ -347,6 +383,22 @@ impl SolverConfig {
                 reason: "APIC damps grid-invisible noise itself: the PIC blend applies to FLIP",
             });
         }
+        if let Some(w) = self.side_walls() {
+            if !(w.width > 0.0 && w.width.is_finite()) {
+                return Err(SolverError::InvalidSetting {
+                    name: "side_walls.width",
+                    value: w.width,
+                    expected: "a positive, finite channel width (m)",
+                });
+            }
+            if !(w.friction >= 0.0 && w.friction.is_finite()) {
+                return Err(SolverError::InvalidSetting {
+                    name: "side_walls.friction",
+                    value: w.friction,
+                    expected: "a finite friction coefficient ≥ 0",
+                });
+            }
+        }
         if self.mass == MassMatrix::Consistent {
             let conflict = if cfg!(feature = "dim3") {
                 Some(("dimension", "the 3D solver has the lumped mass matrix only: use `lumped`"))
@@ -356,6 +408,10 @@ impl SolverConfig {
                 Some(("transfer", "the consistent mass matrix is unstable with APIC: use FLIP"))
             } else if self.periodic.is_some() {
                 Some(("periodic", "the consistent mass matrix does not fold periodic columns yet"))
+            } else if self.side_walls().is_some() {
+                // its reactions are formed from the final accelerations: the side walls'
+                // friction would be booked a second time as a reaction.
+                Some(("side_walls", "side walls act on the lumped mass matrix only: use `lumped`"))
             } else {
                 None
             };
@@ -395,7 +451,7 @@ impl SolverConfig {
             }
         }
         // (each boundary's loads are indexed by a u16: `loads.rs`)
-        if self.walls.len() > usize::from(u16::MAX) - crate::SIDES {
+        if self.walls.len() > usize::from(u16::MAX) - crate::SIDES - 1 {
             return Err(SolverError::InvalidSetting {
                 name: "walls",
                 value: self.walls.len() as f64,

@@ -3,7 +3,8 @@
 //! Stored: kinetic Σ ½ m_p |v_p|², elastic strain Σ V_p ½ σ_p : C⁻¹ : σ_p, and gravitational potential
 //! Σ −m_p g·x_p (zero at the origin). Dissipated (accumulated over the run): plastic work
 //! Σ V_p σ_p : Δεᵖ_p, friction work and normal-constraint work at boundary nodes, and the kinetic
-//! energy the PIC share of a blended transfer removed (`SolverConfig::pic_fraction`). External work is the
+//! energy the PIC share of a blended transfer removed (`SolverConfig::pic_fraction`), and the
+//! friction work of side walls across the plane (`SolverConfig::side_walls`). External work is the
 //! energy put in by loads that change in time: while gravity is ramped up, the potential
 //! −m g(t)·x changes with g at fixed x, and that change Σ −m_p Δg·x_p is booked as external work.
 //!
@@ -33,6 +34,10 @@ pub struct EnergyLedger {
     /// ([`crate::SolverConfig::pic_fraction`]; 0 under pure FLIP).
     #[serde(default)]
     pub transfer_dissipation: Real,
+    /// Work done against the friction of side walls across the plane since the start
+    /// ([`crate::SideWalls`]; 0 without them).
+    #[serde(default)]
+    pub side_wall_friction: Real,
     /// Work of non-conservative external loads since the start.
     pub external_work: Real,
     /// (stored + dissipated) − (initial stored + external work).
@@ -45,12 +50,13 @@ impl EnergyLedger {
         self.kinetic + self.strain + self.potential
     }
 
-    /// plastic + friction + constraint work + transfer dissipation.
+    /// plastic + friction + constraint work + transfer dissipation + side-wall friction.
     pub fn dissipated(&self) -> Real {
         self.plastic_dissipation
             + self.friction_work
             + self.constraint_work
             + self.transfer_dissipation
+            + self.side_wall_friction
     }
 
     /// stored + dissipated: constant for a perfect integrator without external work.
@@ -73,6 +79,9 @@ pub struct Dissipation {
     /// Kinetic energy the PIC share of the transfer removed over all steps.
     #[serde(default)]
     pub transfer: Real,
+    /// Kinetic energy the side walls' friction took over all steps ([`crate::SideWalls`]).
+    #[serde(default)]
+    pub side_walls: Real,
     /// Impulse the boundaries gave the material over all steps (N·s per m of thickness): with
     /// gravity's, it is the change of the material's momentum (a check of conservation).
     #[serde(default)]

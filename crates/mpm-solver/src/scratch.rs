@@ -140,6 +140,13 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// Per-block patches of partial particle-to-grid sums, one [`PatchSums`] per node
     /// (`p2g.rs`).
     pub(crate) patch: Vec<PatchSums>,
+    /// Per-block patches of the side walls' normal force (`stages/side_walls.rs`; empty
+    /// without side walls).
+    pub(crate) wall_patch: Vec<Real>,
+    /// N_i, the side walls' normal force on each active node (empty without side walls).
+    pub(crate) wall_normal: Vec<Real>,
+    /// The nodes whose side-wall friction another node books (reused).
+    pub(crate) wall_skip: Vec<u32>,
     /// Which active nodes some stencil holds (the binning's check that the set is unchanged).
     pub(crate) referenced: Vec<AtomicBool>,
     /// Scratch of the counting sorts (`par::counting_sort`).
@@ -216,6 +223,9 @@ impl<F, const N: usize> Scratch<F, N> {
             node_local: Vec::new(),
             neighbours: Vec::new(),
             patch: Vec::new(),
+            wall_patch: Vec::new(),
+            wall_normal: Vec::new(),
+            wall_skip: Vec::new(),
             referenced: Vec::new(),
             sort_counts: Vec::new(),
             contact_start: Vec::new(),
@@ -258,14 +268,16 @@ impl<F, const N: usize> Scratch<F, N> {
                 + self.contact_start.capacity()
                 + self.contact_entry.capacity()
                 + self.boundary_of.capacity()
-                + 2 * self.periodic_pairs.capacity())
+                + 2 * self.periodic_pairs.capacity()
+                + self.wall_skip.capacity())
                 * size_of::<u32>()
             + self.base.capacity()
             + self.node_local.capacity()
             + self.referenced.capacity()
             + self.neighbours.capacity() * size_of::<[u32; NEIGHBOURS]>()
             + self.patch.capacity() * size_of::<PatchSums>()
-            + self.mass.capacity() * size_of::<Real>()
+            + (self.mass.capacity() + self.wall_patch.capacity() + self.wall_normal.capacity())
+                * size_of::<Real>()
             + (self.velocity.capacity()
                 + self.force.capacity()
                 + self.acceleration.capacity()

@@ -165,10 +165,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let d = checkpoint.dissipation;
         // A NaN initial energy means "not computed yet" (a new run); dissipation must be finite.
-        if let Some(bad) = [d.plastic, d.friction, d.constraint, d.external, d.transfer]
-            .into_iter()
-            .find(|e| !e.is_finite())
-            .or(Some(checkpoint.initial_stored).filter(|e| e.is_infinite()))
+        if let Some(bad) =
+            [d.plastic, d.friction, d.constraint, d.external, d.transfer, d.side_walls]
+                .into_iter()
+                .find(|e| !e.is_finite())
+                .or(Some(checkpoint.initial_stored).filter(|e| e.is_infinite()))
         {
             return Err(SolverError::InvalidSetting {
                 name: "checkpoint.energy",
@@ -176,7 +177,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 expected: "finite energies (J/m)",
             });
         }
-        let boundaries = crate::SIDES + config.walls.len();
+        let boundaries = config.boundary_count();
         let loads = match checkpoint.loads {
             // (a new run's; a run under way carries its loads)
             l if l.is_empty() && checkpoint.step == 0 => {
@@ -187,7 +188,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 return Err(SolverError::InvalidSetting {
                     name: "checkpoint.loads",
                     value: l.len() as f64,
-                    expected: "finite loads, one per grid side and declared wall",
+                    expected: "finite loads, one per grid side, declared wall and the side walls",
                 });
             }
         };
@@ -422,6 +423,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             friction_work: self.dissipation.friction,
             constraint_work: self.dissipation.constraint,
             transfer_dissipation: self.dissipation.transfer,
+            side_wall_friction: self.dissipation.side_walls,
             external_work: self.dissipation.external,
             residual: 0.0,
         };

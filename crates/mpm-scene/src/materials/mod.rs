@@ -17,15 +17,17 @@
 
 mod drucker_prager;
 mod elastic;
+mod mohr_coulomb;
 mod mu_i;
 
 pub use drucker_prager::{ConeMatchSpec, DruckerPragerSpec};
 pub use elastic::ElasticSpec;
+pub use mohr_coulomb::MohrCoulombSpec;
 
 use glam::DMat3;
 use mpm_constitutive::{
     Branch, ConstitutiveError, ConstitutiveModel, DpPerfectState, DruckerPrager, LinearElastic,
-    MAX_BRANCHES, MuI, PlaneTensor, SymTensor, Tangent, TangentModel, UpdateReport,
+    MAX_BRANCHES, MohrCoulomb, MuI, PlaneTensor, SymTensor, Tangent, TangentModel, UpdateReport,
 };
 use mpm_solver::Checkpoint;
 use mpm_solver3d::Checkpoint as SpaceCheckpoint;
@@ -589,6 +591,7 @@ registry! {
         Elastic(LinearElastic),
         DruckerPrager(DruckerPrager),
         MuI(MuI),
+        MohrCoulomb(MohrCoulomb),
     }
     // (2D variant / 3D variant: the 3D ones follow all the 2D ones in checkpoint files)
     states {
@@ -597,6 +600,7 @@ registry! {
         PerfectlyPlastic / SpacePerfectlyPlastic (DruckerPrager<DpPerfectState>),
         MuI / SpaceMuI (MuI),
         Mixed / SpaceMixed (AnyModel),
+        MohrCoulomb / SpaceMohrCoulomb (MohrCoulomb),
     }
 }
 
@@ -653,7 +657,20 @@ mod tests {
     /// report names the branch its own model took.
     #[test]
     fn a_mixed_run_reports_each_models_own_branches() {
-        assert_eq!(AnyModel::BRANCHES, ["elastic", "cone", "apex", "flowing", "separated"]);
+        assert_eq!(
+            AnyModel::BRANCHES,
+            [
+                "elastic",
+                "cone",
+                "apex",
+                "flowing",
+                "separated",
+                "face",
+                "compression_edge",
+                "extension_edge",
+                "vertex"
+            ]
+        );
         let (sand, beads) = (sand(), beads());
         let confined = PlaneTensor::new(-1e3, -1e3, -1e3, 0.0);
         // a large shear pushes both past yield

@@ -1,7 +1,7 @@
 //! `[boundaries]`: the Coulomb node boundaries (eqs 14–18) of the ground and the walls.
 
 use mpm_contact::{Boundary, ContactError, Friction, Wall};
-use mpm_solver::{Boundaries, Periodic, Vector};
+use mpm_solver::{Boundaries, Periodic, SideWalls, Vector};
 
 use super::Ctx;
 use crate::error::SceneError;
@@ -176,6 +176,42 @@ fn friction(ctx: &Ctx<'_>, path: &str, spec: BoundarySpec) -> Result<Friction, S
         BoundarySpec::Fixed => Friction::Fixed,
         BoundarySpec::Frictionless => Friction::Coulomb { mu: 0.0 },
     })
+}
+
+/// `[boundaries] side_walls`: a positive width and exactly one of `friction`,
+/// `friction_angle_deg` (checked by the contact layer's rules, as the ground's law).
+pub(super) fn side_walls(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Option<SideWalls>, SceneError> {
+    let Some(s) = f.boundaries.side_walls else { return Ok(None) };
+    let path = "boundaries.side_walls";
+    if !(s.width > 0.0 && s.width.is_finite()) {
+        return Err(ctx.range(
+            &format!("{path}.width"),
+            s.width,
+            "0 < width < ∞ (m)",
+            "give the channel's width between its side walls in m, e.g. 0.2",
+        ));
+    }
+    let law = match (s.friction, s.friction_angle_deg) {
+        (Some(mu), None) => BoundarySpec::Friction(mu),
+        (None, Some(a)) => BoundarySpec::FrictionAngleDeg(a),
+        (both, _) => {
+            return Err(ctx.err(
+                path,
+                None,
+                if both.is_some() {
+                    "both `friction` and `friction_angle_deg` are given"
+                } else {
+                    "no friction is given"
+                },
+                "exactly one of `friction` (μ_w) or `friction_angle_deg` (δ)",
+                "write e.g. `side_walls = { width = 0.2, friction_angle_deg = 20.0 }`",
+            ));
+        }
+    };
+    let Friction::Coulomb { mu } = friction(ctx, path, law)? else {
+        unreachable!("a Coulomb law's friction is Coulomb")
+    };
+    Ok(Some(SideWalls { width: s.width, friction: mu }))
 }
 
 /// a friction law for the 3D build of the contact layer (the same law, validated by the 2D

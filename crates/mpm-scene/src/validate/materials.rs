@@ -155,6 +155,9 @@ fn material_error(
             };
             (field.to_string(), Some(num(*value)), range.to_string())
         }
+        ConstitutiveError::MissingParameter { name, reason } => {
+            (name.to_string(), None, reason.to_string())
+        }
         ConstitutiveError::IllPosedSoftening { hardening_modulus, lower_bound, .. } => (
             "hardening_modulus".into(),
             Some(num(*hardening_modulus)),

@@ -313,8 +313,14 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let boundaries = boundaries::build(ctx, f)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
     let walls = boundaries::walls(ctx, f, &grid, &seeds)?;
-    let config =
-        solver::config(ctx, &f.solver, &settings, boundaries, periodic, walls, &materials)?;
+    let side_walls = boundaries::side_walls(ctx, f)?;
+    let config = solver::config(
+        ctx,
+        &f.solver,
+        &settings,
+        (boundaries, periodic, walls, side_walls),
+        &materials,
+    )?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;
     let end_time = f.solver.end_time;

@@ -81,9 +81,13 @@ pub(super) fn space_warnings(
                     field: format!("materials.{m}.cone_match"),
                     message: "the Drucker-Prager cone defaults to the paper's plane-strain match \
                               to Mohr-Coulomb, which in 3D is neither the compression nor the \
-                              extension corner: write `cone_match = \"outer\"` (triaxial \
-                              compression) or another match, or silence this if the \
-                              plane-strain cone is meant"
+                              extension corner, and no single cone is right on every stress \
+                              path of a flow (at φ = 30° the compression cone acts in plane \
+                              strain like φ ≈ 49°): for a granular flow write \
+                              `kind = \"mohr_coulomb\"` with the same cohesion, friction and \
+                              dilatancy angles, whose surface is the measured friction angle on \
+                              every path; or choose a cone with `cone_match = \"outer\"` \
+                              (triaxial compression) or `\"inner\"` (extension)"
                         .into(),
                 });
             }

@@ -187,9 +187,12 @@ pub(super) fn config(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
     settings: &Settings,
-    boundaries: Boundaries,
-    periodic: Option<Periodic>,
-    walls: Vec<Wall>,
+    (boundaries, periodic, walls, side_walls): (
+        Boundaries,
+        Option<Periodic>,
+        Vec<Wall>,
+        Option<mpm_solver::SideWalls>,
+    ),
     materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
     let transfer = s.transfer.unwrap_or_default();
@@ -206,6 +209,7 @@ pub(super) fn config(
         boundaries,
         periodic,
         walls,
+        side_walls,
         small_mass_ratio: settings.small_mass_ratio,
         objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
         gravity_ramp: settings.gravity_ramp,

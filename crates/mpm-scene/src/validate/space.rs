@@ -62,6 +62,15 @@ pub(super) fn load_space(
                 "remove `[initial_state]`; in 3D, let the bodies settle under a ramped gravity \
                  (`[solver] gravity_ramp`) before the flow starts",
             )
+        } else if e.message().contains("unknown field `side_walls`") {
+            ctx.err(
+                "boundaries.side_walls",
+                None,
+                "side walls across the plane are a plane-strain (2D) model",
+                "no `side_walls` in a 3D scene",
+                "in 3D the channel's walls are faces of the grid: declare `back_wall` and \
+                 `front_wall` with their friction, e.g. `{ friction_angle_deg = 20.0 }`",
+            )
         } else {
             serde_error(&ctx, &e)
         }
@@ -1249,6 +1258,29 @@ end_time = 0.1
     fn the_geostatic_state_is_refused_as_2d_only() {
         let e = error(&scene(("", ""), "\n[initial_state]\nkind = \"geostatic\"\n"));
         assert!(e.contains("`initial_state`") && e.contains("2D only"), "{e}");
+    }
+
+    /// Side walls across the plane are a plane-strain model: refused in 3D at their line,
+    /// with the faces to use instead.
+    #[test]
+    fn side_walls_are_refused_as_2d_only() {
+        let e = error(&scene(
+            (
+                "ground = \"rough\"\n",
+                "ground = \"rough\"\nside_walls = { width = 0.2, friction = 0.4 }\n",
+            ),
+            "",
+        ));
+        assert!(e.contains("`boundaries.side_walls`") && e.contains("back_wall"), "{e}");
+    }
+
+    /// A Mohr–Coulomb sand loads in 3D and draws no cone warning (it has no cone to choose).
+    #[test]
+    fn mohr_coulomb_needs_no_cone_in_3d() {
+        let text = scene(("kind = \"drucker_prager\"", "kind = \"mohr_coulomb\""), "")
+            .replace("cone_match = \"outer\"\n", "");
+        let s = load_space_str(&text, "test.toml").unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     }
 
     #[test]

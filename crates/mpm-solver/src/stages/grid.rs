@@ -259,6 +259,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.constraint += constraint;
         self.dissipation.impulse += impulse;
         self.resolve_constrained()?;
+        if let Some(walls) = self.config.side_walls() {
+            // after the contact law: the friction opposes the velocity the boundaries leave
+            // (scaling it keeps what they imposed), before the ghosts mirror their images.
+            self.side_wall_friction(walls, dt);
+        }
         self.mirror_fixed_ghosts(dt);
         self.book_reactions(dt);
         Ok(())

@@ -5,5 +5,6 @@ pub(crate) mod grid;
 mod locate;
 pub(crate) mod mass;
 pub(crate) mod p2g;
+mod side_walls;
 mod stress;
 pub(crate) mod timestep;

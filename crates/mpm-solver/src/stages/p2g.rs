@@ -76,6 +76,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Transfer::Flip => self.scatter::<true, true, true, false>(0.0, g),
             Transfer::Apic => self.scatter::<true, true, true, true>(0.0, g),
         }
+        if let Some(walls) = self.config.side_walls() {
+            self.p2g_side_walls(walls);
+        }
     }
 
     /// nodal force f_i^int + f_i^ext (eqs 2–3) into `scratch.force`.
@@ -83,6 +86,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // Gravity at mid-step (it only changes during a ramp).
         let g = self.config.gravity_at(self.time + 0.5 * dt);
         self.scatter::<false, false, true, false>(0.0, g);
+        if let Some(walls) = self.config.side_walls() {
+            self.p2g_side_walls(walls);
+        }
     }
 
     /// −f_i^int = −Σ_p V_p σ_p · G_ip alone (no gravity) into `scratch.force`: the implicit
@@ -314,70 +320,27 @@ fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: b
     (node_block, node_local, neighbours): (&[u32], &[u8], &[[u32; NEIGHBOURS]]),
     (nodal_mass, nodal_velocity, nodal_force): (&mut [Real], &mut [Vector], &mut [Vector]),
 ) {
-    let side = patch_side(N);
-    let cells = side.pow(DIM as u32);
-    let w = stencil_side(N);
-    let edge = w - 1;
-    let block = BLOCK_SIDE as usize;
+    let cells = patch_side(N).pow(DIM as u32);
     nodal_mass
         .par_iter_mut()
         .zip(nodal_velocity.par_iter_mut().zip(nodal_force.par_iter_mut()))
         .enumerate()
         .with_min_len(256)
         .for_each(|(i, (m, (v, f)))| {
-            let b = node_block[i] as usize;
-            let c = usize::from(node_local[i]);
             let (mut ms, mut q, mut fs) = (0.0, Vector::ZERO, Vector::ZERO);
-            let mut add = |src: u32, at: usize| {
-                if src != u32::MAX {
-                    let s = &patch[src as usize * cells + at];
-                    if MASS {
-                        ms += s.mass;
-                    }
-                    if MOMENTUM {
-                        q += s.momentum;
-                    }
-                    if FORCE {
-                        fs += s.force;
-                    }
+            let add = |src: u32, at: usize| {
+                let s = &patch[src as usize * cells + at];
+                if MASS {
+                    ms += s.mass;
+                }
+                if MOMENTUM {
+                    q += s.momentum;
+                }
+                if FORCE {
+                    fs += s.force;
                 }
             };
-            #[cfg(not(feature = "dim3"))]
-            {
-                let (ci, cj) = (c % side, c / side);
-                let [below_left, below, left] = neighbours[b];
-                if ci < edge && cj < edge {
-                    add(below_left, c + block + side * block);
-                }
-                if cj < edge {
-                    add(below, c + side * block);
-                }
-                if ci < edge {
-                    add(left, c + block);
-                }
-            }
-            // neighbour m lies one block lower along the axes whose bit of m is 0
-            // (`locate.rs`), in the order m = 0, 1, …: the node is in its patch where it is
-            // within the w − 1 edge layers along each of those axes.
-            #[cfg(feature = "dim3")]
-            {
-                let local = [c % side, (c / side) % side, c / (side * side)];
-                let stride = [1, side, side * side];
-                for (m, &src) in neighbours[b].iter().enumerate() {
-                    let mut at = c;
-                    let mut inside = true;
-                    for a in 0..DIM {
-                        if (m >> a) & 1 == 0 {
-                            inside &= local[a] < edge;
-                            at += block * stride[a];
-                        }
-                    }
-                    if inside {
-                        add(src, at);
-                    }
-                }
-            }
-            add(b as u32, c);
+            visit_patches::<N>(i, (node_block, node_local, neighbours), add);
             if MASS {
                 *m = ms;
             }
@@ -388,6 +351,64 @@ fn reduce<const N: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: b
                 *f = fs;
             }
         });
+}
+
+/// calls `add(block, place)` for every patch that holds active node `i`, in the fixed order
+/// of the module docs (the blocks below-left, below, left, then its own; in 3D the seven lower
+/// neighbours in order, then its own), so that every sum over patches adds its terms in one
+/// order whatever the thread count.
+#[inline(always)]
+pub(crate) fn visit_patches<const N: usize>(
+    i: usize,
+    (node_block, node_local, neighbours): (&[u32], &[u8], &[[u32; NEIGHBOURS]]),
+    mut add: impl FnMut(u32, usize),
+) {
+    let side = patch_side(N);
+    let edge = stencil_side(N) - 1;
+    let block = BLOCK_SIDE as usize;
+    let b = node_block[i] as usize;
+    let c = usize::from(node_local[i]);
+    let mut add = |src: u32, at: usize| {
+        if src != u32::MAX {
+            add(src, at);
+        }
+    };
+    #[cfg(not(feature = "dim3"))]
+    {
+        let (ci, cj) = (c % side, c / side);
+        let [below_left, below, left] = neighbours[b];
+        if ci < edge && cj < edge {
+            add(below_left, c + block + side * block);
+        }
+        if cj < edge {
+            add(below, c + side * block);
+        }
+        if ci < edge {
+            add(left, c + block);
+        }
+    }
+    // neighbour m lies one block lower along the axes whose bit of m is 0
+    // (`locate.rs`), in the order m = 0, 1, …: the node is in its patch where it is
+    // within the w − 1 edge layers along each of those axes.
+    #[cfg(feature = "dim3")]
+    {
+        let local = [c % side, (c / side) % side, c / (side * side)];
+        let stride = [1, side, side * side];
+        for (m, &src) in neighbours[b].iter().enumerate() {
+            let mut at = c;
+            let mut inside = true;
+            for a in 0..DIM {
+                if (m >> a) & 1 == 0 {
+                    inside &= local[a] < edge;
+                    at += block * stride[a];
+                }
+            }
+            if inside {
+                add(src, at);
+            }
+        }
+    }
+    add(b as u32, c);
 }
 
 /// the stress's columns σ e_a in the plane of the analysis (plane strain: σ_zz does not act
