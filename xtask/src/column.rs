@@ -1,5 +1,5 @@
-//! Granular column collapses against the quasi-2D experiments (Lube et al. 2005, J. Fluid Mech.
-//! 541; Lajeunesse et al. 2005, Phys. Fluids 17), run through the scene layer and the CLI's run
+//! Granular column collapses against the quasi-2D experiments (Lube et al. 2005, Phys. Rev. E
+//! 72, 041301; Lajeunesse et al. 2005, Phys. Fluids 17, 103302), run through the scene layer and the CLI's run
 //! driver exactly as a user's scene is.
 //!
 //! A column L0 = 0.2 m wide and a·L0 high of cohesionless Drucker-Prager sand (φ = 30°, ψ = 0,

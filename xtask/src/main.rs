@@ -5,6 +5,9 @@
 //! - `study [--quick]`: the speed/accuracy trade (cell size, particles per cell, scheme, shape
 //!   functions, Courant number) on the sliding blocks, the vibrating bar and the flume; CSV,
 //!   convergence orders, Pareto fronts and the three presets, in `target/study/`.
+//! - `runout [--quick]`: column collapses against the quasi-2D and axisymmetric experiments,
+//!   Mohr–Coulomb and Drucker-Prager, with and without side walls, at several resolutions;
+//!   `target/runout/` and `docs/runout.md` (`RUNOUT_ONLY=TEXT` runs the cases whose label has it).
 //! - `dem`: the worked example's synthetic valley-side DEM (ASCII grid and GeoTIFF) and its
 //!   rupture surface, in `docs/examples/valley/`.
 //! - `extremes`: scenes at the edges of the admissible settings, each with its expected outcome
@@ -17,6 +20,7 @@ mod extremes;
 mod flume;
 mod plot;
 mod presets;
+mod runout;
 mod runs;
 mod study;
 mod table;
@@ -34,6 +38,8 @@ commands:
   bench [--quick]    measure throughput and thread scaling into docs/performance.md
                      (--quick: no 1 M-particle bodies; MPM_PEERS_DIR=DIR adds the side-by-side
                      against Taichi from DIR/side_by_side.py)
+  runout [--quick]   column collapses against the experiments, model by model, into
+                     docs/runout.md (RUNOUT_ONLY=TEXT: only the cases whose label has TEXT)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
   dem                write the worked example's synthetic valley-side DEM (docs/examples/valley/)
   help               this text";
@@ -58,6 +64,7 @@ fn main() -> ExitCode {
         "verify" => verify::run(quick),
         "study" => study::run(quick),
         "bench" => bench::run(quick),
+        "runout" => runout::run(quick),
         "extremes" => extremes::run(),
         "dem" => dem::run(),
         "help" | "--help" | "-h" => {

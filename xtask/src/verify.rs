@@ -7,6 +7,7 @@
 
 mod flume3d;
 mod mixed;
+mod mohr_coulomb;
 mod open_core;
 mod three_d;
 
@@ -489,6 +490,8 @@ pub fn run(quick: bool) -> Result<bool> {
     manufactured_rows(&mut rows);
     geostatic_rows(&mut rows);
     mixed::rows(&mut rows);
+    mohr_coulomb::rows(&mut rows);
+    mohr_coulomb::runout_rows(&mut rows, quick);
     three_d::rows(&mut rows, quick);
     flume3d::rows(&mut rows, quick);
     let omega = 2.0 * std::f64::consts::PI / bar::period();
