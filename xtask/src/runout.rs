@@ -242,6 +242,8 @@ fn scene_channel(c: &Case, delta: f64) -> String {
     let nx = (width / dx).ceil() as u32;
     let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
     let nz = (CHANNEL / dx).round() as u32;
+    // (the box spans the whole channel: W/Δx cells, whole at every resolution the study uses)
+    let depth = f64::from(nz) * dx;
     let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(3.0);
     format!(
         "title = \"{label}\"\n\
@@ -249,7 +251,7 @@ fn scene_channel(c: &Case, delta: f64) -> String {
          cell = [{dx}, {dx}, {dx}]\ncells = [{nx}, {ny}, {nz}]\n\
          [materials.sand]\n{material}\
          [[bodies]]\nname = \"column\"\nmaterial = \"sand\"\nshape = \"box\"\n\
-         min = [0.0, 0.0, 0.0]\nmax = [{l0}, {h0}, {CHANNEL}]\n\
+         min = [0.0, 0.0, 0.0]\nmax = [{l0}, {h0}, {depth}]\n\
          [boundaries]\nground = {ground}\nleft_wall = \"frictionless\"\n\
          back_wall = {{ friction_angle_deg = {delta} }}\nfront_wall = {{ friction_angle_deg = {delta} }}\n\
          [solver]\nend_time = {end}\n\
@@ -270,6 +272,9 @@ pub struct Outcome {
     pub runout: f64,
     /// final height / L0.
     pub height: f64,
+    /// (farthest particle − L0)/L0 at the end: the same measure in 2D and 3D (the main mass's
+    /// front is found by a section's gap rule in 2D, in plan in 3D).
+    pub leading: f64,
     /// steps.
     pub steps: u64,
     /// particles.
@@ -304,6 +309,7 @@ pub fn run_case(c: &Case, dir: &Path) -> Result<Outcome, String> {
         status,
         runout: (r.front_x - l0) / l0,
         height: r.max_thickness / l0,
+        leading: (r.leading_x - l0) / l0,
         steps: s.steps,
         particles: s.particles,
         wall: start.elapsed().as_secs_f64(),

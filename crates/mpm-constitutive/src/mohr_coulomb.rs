@@ -5,7 +5,7 @@
 //!
 //! Drucker-Prager (eqs 23–25 of the paper) is a cone that must be fitted to the pyramid, and no
 //! single fit is right on every stress path (`ConeMatch`): at φ = 30° the cone through the
-//! compression corners is, in plane strain, a material of φ ≈ 49°. Mohr–Coulomb needs no such
+//! compression corners is, in plane strain, a material of φ ≈ 44° (ψ = 0) to 49° (associated). Mohr–Coulomb needs no such
 //! choice: its surface is what a friction angle measured in a shear test means, on every path.
 //!
 //! # Glossary
@@ -296,6 +296,9 @@ impl MohrCoulomb {
         let Strength { k, cbar, m, apex } = *st;
         let f = k * sb[0] - sb[2] - cbar;
         let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        if !f.is_finite() {
+            return Err(ConstitutiveError::NonFiniteStress { component: "trial", value: f });
+        }
         if f <= 0.0 {
             return Ok(Return { branch: McBranch::ELASTIC, stress: sb, jacobian: identity });
         }
@@ -356,7 +359,9 @@ impl MohrCoulomb {
                 s[2] = x;
                 (McBranch::EXTENSION_EDGE, s[0] >= x)
             };
-            if !on_side {
+            // (without an apex, φ = 0, the edge point is on its side by 2c ≥ 0: rounding
+            // must not send it anywhere else)
+            if !on_side && apex.is_some() {
                 continue;
             }
             // dσ/dσᴮ = I − [Db1 Db2] M⁻¹ [a1 a2]ᵀ
@@ -402,6 +407,9 @@ impl MohrCoulomb {
     ) -> Result<Tangent, ConstitutiveError> {
         self.check_inputs(sigma, state, d_eps)?;
         let trial = self.trial(sigma, d_eps);
+        if !trial.is_finite() {
+            return Err(overflow(&trial));
+        }
         let pr = Principal::of(&trial);
         let r = self.return_map(pr.values, &self.strength(state))?;
         let elastic = self.elastic.stiffness_matrix();
@@ -480,6 +488,14 @@ fn check_strength(
     if !(psi >= 0.0 && psi <= phi) {
         return Err(invalid(names[2], psi, "0 <= psi <= friction angle (deg)"));
     }
+    if c == 0.0 && phi == 0.0 {
+        // no strength at all: every deviatoric stress would return to zero, a fluid
+        return Err(invalid(
+            names[0],
+            c,
+            "cohesion > 0 when the friction angle is 0 (no strength at all otherwise)",
+        ));
+    }
     Ok(())
 }
 
@@ -511,15 +527,15 @@ impl ConstitutiveModel for MohrCoulomb {
     ) -> Result<UpdateReport, ConstitutiveError> {
         self.check_inputs(sigma, state, d_eps)?;
         let trial = self.trial(sigma, d_eps);
+        // finite inputs so large that the trial overflowed: refused before the return (whose
+        // apex does not depend on the trial, and would hide it)
+        if !trial.is_finite() {
+            return Err(overflow(&trial));
+        }
         let strength = self.strength(state);
-        // the elastic test first, on the trial's Mohr circle of σ1 and σ3 alone would need the
-        // decomposition anyway: decompose once.
         let pr = Principal::of(&trial);
         let r = self.return_map(pr.values, &strength)?;
         if r.branch == McBranch::ELASTIC {
-            if !trial.is_finite() {
-                return Err(overflow(&trial));
-            }
             *sigma = trial;
             return Ok(UpdateReport::ELASTIC);
         }
@@ -543,6 +559,9 @@ impl ConstitutiveModel for MohrCoulomb {
         let s = r.stress;
         let s_mean = (s[0] + s[1] + s[2]) / 3.0;
         let work = (0..3).map(|i| (s[i] - s_mean) * dev[i]).sum::<f64>() / (2.0 * g) + s_mean * vol;
+        if !(d_eps_bar.is_finite() && work.is_finite()) {
+            return Err(overflow(&trial));
+        }
         *sigma = new;
         state.eps_p_bar += d_eps_bar;
         Ok(UpdateReport { branch: r.branch, delta_lambda: d_eps_bar, dissipation: work })

@@ -52,14 +52,15 @@ prop_compose! {
     fn params()(
         young in 1.0e5..1.0e8f64,
         poisson in -0.3..0.49f64,
-        phi in prop_oneof![Just(30.0), 1.0..60.0f64],
+        phi in prop_oneof![Just(30.0), Just(0.0), 1.0..60.0f64],
         psi_frac in prop_oneof![Just(0.0), Just(1.0), 0.0..=1.0f64],
         cohesion in prop_oneof![Just(0.0), 0.0..100.0f64],
     ) -> MohrCoulombParams {
         MohrCoulombParams {
             young,
             poisson,
-            cohesion,
+            // (Tresca needs a cohesion: c = φ = 0 is refused)
+            cohesion: if phi == 0.0 { cohesion.max(1.0) } else { cohesion },
             friction_angle_deg: phi,
             dilatancy_angle_deg: psi_frac * phi,
             softening: None,
@@ -540,4 +541,24 @@ fn tension_goes_to_the_apex() {
     m.update(&mut s, &mut st, &(SymTensor::IDENTITY * 1e-2), DT).unwrap();
     let apex = 3.0 / 30f64.to_radians().tan();
     assert!((s.xx - apex).abs() <= 1e-12 * apex && s.xy == 0.0);
+}
+
+/// Finite inputs whose trial overflows are refused, the point untouched (never the apex with a
+/// NaN plastic strain); a material with neither cohesion nor friction is refused.
+#[test]
+fn overflow_and_strengthless_materials_are_refused() {
+    let m = sand(30.0, 0.0, 0.3);
+    let (mut s, mut st) = (SymTensor::IDENTITY * -10.0, McState::default());
+    let huge = SymTensor::new(1e305, -1e305, 0.0, 1e305, 0.0, 0.0);
+    assert!(m.update(&mut s, &mut st, &huge, DT).is_err());
+    assert_eq!((s, st), (SymTensor::IDENTITY * -10.0, McState::default()));
+    assert!(m.consistent_tangent(&s, &st, &huge).is_err());
+    let mut p = MohrCoulombParams::sand(0.0);
+    assert!(MohrCoulomb::new(p).is_err());
+    p.cohesion = 1.0;
+    let tresca = MohrCoulomb::new(p).unwrap();
+    // Tresca: a large shear returns to τ = c, whatever the pressure
+    let (mut s, mut st) = (SymTensor::IDENTITY * -1e6, McState::default());
+    tresca.update(&mut s, &mut st, &SymTensor::new(0.0, 0.0, 0.0, 1e-2, 0.0, 0.0), DT).unwrap();
+    assert!((s.xy - 1.0).abs() <= 1e-9, "{s:?}");
 }

@@ -4,7 +4,8 @@
 //! barrier's designer sizes it for).
 //!
 //! Each boundary node's contact impulse (eqs 14–18, [`mpm_contact::apply_all`]) goes to the
-//! boundary that carried it; a node held by several (a wall's foot on the ground, a corner) is
+//! boundary that carried it (the side walls across the plane of a plane-strain run, when there
+//! are some, are the last entry: `stages/side_walls.rs`); a node held by several (a wall's foot on the ground, a corner) is
 //! divided by [`mpm_contact::impulse_shares`] (under the consistent mass matrix, whose reactions
 //! are formed after its re-solve, such a node's reaction goes whole to its first held plane's
 //! boundary). The impulses of the ghost nodes behind a fixed side

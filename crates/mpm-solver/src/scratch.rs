@@ -147,6 +147,10 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) wall_normal: Vec<Real>,
     /// The nodes whose side-wall friction another node books (reused).
     pub(crate) wall_skip: Vec<u32>,
+    /// (ghost, image) of the ghosts behind slip planes, for the side walls (reused).
+    pub(crate) wall_ghosts: Vec<(u32, u32)>,
+    /// Each node's factor on v^L from the side walls' friction (reused).
+    pub(crate) wall_scale: Vec<Real>,
     /// Which active nodes some stencil holds (the binning's check that the set is unchanged).
     pub(crate) referenced: Vec<AtomicBool>,
     /// Scratch of the counting sorts (`par::counting_sort`).
@@ -226,6 +230,8 @@ impl<F, const N: usize> Scratch<F, N> {
             wall_patch: Vec::new(),
             wall_normal: Vec::new(),
             wall_skip: Vec::new(),
+            wall_ghosts: Vec::new(),
+            wall_scale: Vec::new(),
             referenced: Vec::new(),
             sort_counts: Vec::new(),
             contact_start: Vec::new(),
@@ -269,14 +275,18 @@ impl<F, const N: usize> Scratch<F, N> {
                 + self.contact_entry.capacity()
                 + self.boundary_of.capacity()
                 + 2 * self.periodic_pairs.capacity()
-                + self.wall_skip.capacity())
+                + self.wall_skip.capacity()
+                + 2 * self.wall_ghosts.capacity())
                 * size_of::<u32>()
             + self.base.capacity()
             + self.node_local.capacity()
             + self.referenced.capacity()
             + self.neighbours.capacity() * size_of::<[u32; NEIGHBOURS]>()
             + self.patch.capacity() * size_of::<PatchSums>()
-            + (self.mass.capacity() + self.wall_patch.capacity() + self.wall_normal.capacity())
+            + (self.mass.capacity()
+                + self.wall_patch.capacity()
+                + self.wall_normal.capacity()
+                + self.wall_scale.capacity())
                 * size_of::<Real>()
             + (self.velocity.capacity()
                 + self.force.capacity()

@@ -363,7 +363,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// what each boundary gave the material since the start (`loads.rs`): the grid's sides
-    /// ([`crate::SIDE_NAMES`]), then the declared walls in their order. They add up to
+    /// ([`crate::SIDE_NAMES`]), then the declared walls in their order, then the side walls
+    /// when the run has some ([`crate::SideWalls`]; their normal part is the walls' pressing
+    /// across the plane, small-mass nodes included, which take no friction). They add up to
     /// [`Self::boundary_impulse`].
     pub fn boundary_loads(&self) -> &[crate::BoundaryLoad] {
         &self.loads

@@ -83,7 +83,7 @@ pub(super) fn space_warnings(
                               to Mohr-Coulomb, which in 3D is neither the compression nor the \
                               extension corner, and no single cone is right on every stress \
                               path of a flow (at φ = 30° the compression cone acts in plane \
-                              strain like φ ≈ 49°): for a granular flow write \
+                              strain like φ ≈ 44° to 49°): for a granular flow write \
                               `kind = \"mohr_coulomb\"` with the same cohesion, friction and \
                               dilatancy angles, whose surface is the measured friction angle on \
                               every path; or choose a cone with `cone_match = \"outer\"` \

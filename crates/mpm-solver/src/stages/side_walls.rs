@@ -13,7 +13,12 @@
 //! APIC's velocities all carry it, and every contact constraint already met stays met (v^L is
 //! scaled by a factor in [0, 1]).
 //!
-//! The kinetic energy it takes, ½ m_i (|v^L|² − |v^L_new|²), is booked as its own dissipation
+//! A ghost node behind a slip plane (wide stencils) takes its image's factor instead of its
+//! own, so that the mirrored constraint the contact law met (linear in both velocities) still
+//! holds.
+//!
+//! The work of its impulse J_i = m_i (v^L_new − v^L) at the mean of the node's start and end
+//! velocities (the contact law's midpoint rule) is booked as its own dissipation
 //! (`Dissipation::side_walls`), its impulse with the boundaries' (`Dissipation::impulse`, the
 //! momentum balance) and in the loads as the last entry, whose normal part is the walls' normal
 //! impulse Σ N_i Δt (both walls, acting across the plane) and whose tangential part is the
@@ -57,34 +62,66 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         skip.extend(sc.periodic_pairs.iter().map(|&(image, _)| image));
         skip.extend(sc.fixed_ghosts.iter().map(|f| f.ghost));
         skip.sort_unstable();
+        // a ghost behind a slip plane met a wall moving with its image's mirrored velocity:
+        // it takes its image's factor, so that the constraint the contact law met, linear in
+        // both velocities, still holds (own capacity aside).
+        let mut ghosts = std::mem::take(&mut sc.wall_ghosts);
+        ghosts.clear();
+        ghosts.extend(
+            sc.boundary
+                .iter()
+                .filter_map(|b| b.mirror.filter(|m| !m.fixed).map(|m| (b.node, m.image))),
+        );
+        ghosts.sort_unstable();
+        let is_ghost =
+            |i: u32| !ghosts.is_empty() && ghosts.binary_search_by_key(&i, |g| g.0).is_ok();
+        sc.wall_scale.clear();
+        sc.wall_scale.resize(sc.mass.len(), 1.0);
         let (mut work, mut impulse, mut normal) = (0.0, Vector::ZERO, 0.0);
+        // the impulse m (v_new − v^L) at node i, booked with the work it does at the mean of the
+        // node's start and end velocities (the midpoint rule of the contact law's booking:
+        // a friction that holds a node against a steady force books no work)
+        let mut book = |sc: &mut Scratch<S::Factors, N>, i: usize, scale: Real| {
+            let end = sc.velocity[i] + sc.acceleration[i] * dt;
+            let new = end * scale;
+            sc.acceleration[i] += (new - end) / dt;
+            if skip.is_empty() || skip.binary_search(&(i as u32)).is_err() {
+                let j = (new - end) * sc.mass[i];
+                work -= j.dot(0.5 * (sc.velocity[i] + new));
+                impulse += j;
+            }
+        };
         for i in 0..sc.mass.len() {
             let n = sc.wall_normal[i];
             if n <= 0.0 {
                 continue;
             }
-            let books = skip.is_empty() || skip.binary_search(&(i as u32)).is_err();
-            let m = sc.mass[i];
-            if books {
+            if skip.is_empty() || skip.binary_search(&(i as u32)).is_err() {
                 normal += n * dt;
             }
-            if m <= small {
-                // (a small-mass node takes body force only, §2(3))
+            let m = sc.mass[i];
+            if m <= small || is_ghost(i as u32) {
+                // (a small-mass node takes body force only, §2(3); its share of the normal
+                // load is booked all the same)
                 continue;
             }
-            let end = sc.velocity[i] + sc.acceleration[i] * dt;
-            let speed = end.length();
+            let speed = (sc.velocity[i] + sc.acceleration[i] * dt).length();
             if speed == 0.0 {
                 continue;
             }
             let cut = (walls.friction * n * dt / m).min(speed);
-            sc.acceleration[i] -= end * (cut / (speed * dt));
-            if books {
-                work += m * cut * (speed - 0.5 * cut);
-                impulse -= end * (m * cut / speed);
+            let scale = 1.0 - cut / speed;
+            sc.wall_scale[i] = scale;
+            book(sc, i, scale);
+        }
+        for &(g, image) in &ghosts {
+            let scale = sc.wall_scale[image as usize];
+            if scale < 1.0 && sc.mass[g as usize] > small {
+                book(sc, g as usize, scale);
             }
         }
         sc.wall_skip = skip;
+        sc.wall_ghosts = ghosts;
         self.dissipation.side_walls += work;
         self.dissipation.impulse += impulse;
         let load = self.loads.last_mut().expect("the side walls' entry (Solver::new)");
