@@ -149,6 +149,12 @@ struct Strength {
     m: f64,
     /// the apex `c cot φ` (Pa); `None` for φ = 0 (Tresca: no apex).
     apex: Option<f64>,
+    /// `c cos φ` (Pa) and `sin φ`: the cone inscribed in the pyramid,
+    /// `√J2 √(1 + sin²φ/3) ≤ c cos φ − p sin φ`, an elastic test without the decomposition.
+    c_cos: f64,
+    sin: f64,
+    /// `1 + sin²φ/3`.
+    inscribed: f64,
 }
 
 impl Strength {
@@ -158,7 +164,15 @@ impl Strength {
         let k = (1.0 + sin) / (1.0 - sin);
         let cbar = 2.0 * c * cos / (1.0 - sin);
         let apex = (sin > 0.0).then(|| c * cos / sin);
-        Self { k, cbar, m: (1.0 + sin_psi) / (1.0 - sin_psi), apex }
+        Self {
+            k,
+            cbar,
+            m: (1.0 + sin_psi) / (1.0 - sin_psi),
+            apex,
+            c_cos: c * cos,
+            sin,
+            inscribed: 1.0 + sin * sin / 3.0,
+        }
     }
 }
 
@@ -293,7 +307,7 @@ impl MohrCoulomb {
 
     /// the return of the sorted trial principal stresses `sb` (see the module docs).
     fn return_map(&self, sb: [f64; 3], st: &Strength) -> Result<Return, ConstitutiveError> {
-        let Strength { k, cbar, m, apex } = *st;
+        let Strength { k, cbar, m, apex, .. } = *st;
         let f = k * sb[0] - sb[2] - cbar;
         let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         if !f.is_finite() {
@@ -533,6 +547,14 @@ impl ConstitutiveModel for MohrCoulomb {
             return Err(overflow(&trial));
         }
         let strength = self.strength(state);
+        // inside the cone inscribed in the pyramid (touching its faces where the Lode angle
+        // maximises cos θ − sin θ sin φ/√3, at √(1 + sin²φ/3)): elastic, no decomposition
+        // needed (most points of a deposit at rest, and the whole elastic range)
+        let r = strength.c_cos - trial.mean() * strength.sin;
+        if r >= 0.0 && trial.j2() * strength.inscribed <= r * r {
+            *sigma = trial;
+            return Ok(UpdateReport::ELASTIC);
+        }
         let pr = Principal::of(&trial);
         let r = self.return_map(pr.values, &strength)?;
         if r.branch == McBranch::ELASTIC {

@@ -257,6 +257,24 @@ proptest! {
         prop_assert_eq!(r.branch, expected);
     }
 
+    /// The cone the update uses as its quick elastic test lies inside the pyramid: a stress in
+    /// it has f ≤ 0 (to rounding), and it touches the faces (a stress on it at the maximising
+    /// Lode angle has f = 0).
+    #[test]
+    fn the_inscribed_cone_lies_inside_the_pyramid((m, sigma, _d) in case(), t in 0.0..1.0f64) {
+        let p = m.params();
+        let (sin, cos) = p.friction_angle_deg.to_radians().sin_cos();
+        let r = p.cohesion * cos - sigma.mean() * sin;
+        prop_assume!(r > 0.0);
+        let dev = sigma.deviator();
+        prop_assume!(dev.j2() > 0.0);
+        // scaled onto the inscribed cone, then a fraction t of the way from the axis
+        let on = (r / (dev.j2() * (1.0 + sin * sin / 3.0)).sqrt()) * t;
+        let tau = SymTensor::IDENTITY * sigma.mean() + dev * on;
+        let f = m.yield_function(&tau, &McState::default());
+        prop_assert!(f <= 1e-12 * scale(&tau), "f = {f} at t = {t}");
+    }
+
     /// Turning the start stress and the increment turns the result: the model is isotropic.
     #[test]
     fn rotating_the_input_rotates_the_output(
