@@ -512,7 +512,8 @@ fn table(rows: &[Row]) -> String {
         };
         let (f1, f2, f3) = (o.runout, o2.runout, o3.runout);
         let ratio = (f2 - f1) / (f3 - f2);
-        if ratio > 1.0 && ratio.is_finite() {
+        // an order below ½ is not the asymptotic range: its extrapolation would run away
+        if ratio > 2f64.sqrt() && ratio.is_finite() {
             let p = ratio.log2();
             let limit = f3 + (f3 - f2) / (2f64.powf(p) - 1.0);
             let (low, high) = experiment_runout_of(c.dim == 2 || c.wall_deg.is_some(), c.a);
@@ -531,7 +532,8 @@ fn table(rows: &[Row]) -> String {
         } else {
             let _ = writeln!(
                 rich,
-                "| {} | {} | {} | {} | {:.3} / {:.3} / {:.3} | not monotone | – | – |",
+                "| {} | {} | {} | {} | {:.3} / {:.3} / {:.3} | not in the asymptotic range \
+                 (order < ½ or not monotone) | – | – |",
                 c.dim,
                 c.a,
                 c.model.name(),
