@@ -93,9 +93,18 @@ fn in_plane(t: &SymTensor) -> ([f64; 3], [DVec3; 3]) {
     let centre = 0.5 * (t.xx + t.yy);
     let half = 0.5 * (t.xx - t.yy);
     let radius = half.hypot(t.xy);
-    // the major direction at θ = ½ atan2(2σxy, σxx − σyy) from x.
-    let theta = 0.5 * t.xy.atan2(half);
-    let (s, c) = theta.sin_cos();
+    // the major direction at θ = ½ atan2(2σxy, σxx − σyy) from x, from the half-angle
+    // formulas (no trigonometric call): cos 2θ = half/R, sin 2θ = σxy/R, the larger of cos θ
+    // and sin θ from its square root and the other from sin θ cos θ = σxy/(2R), without
+    // cancellation
+    let cos2 = half / radius;
+    let (c, s) = if cos2 >= 0.0 {
+        let c = (0.5 * (1.0 + cos2)).sqrt();
+        (c, t.xy / (2.0 * radius * c))
+    } else {
+        let s = (0.5 * (1.0 - cos2)).sqrt().copysign(t.xy);
+        (t.xy / (2.0 * radius * s), s)
+    };
     (
         [centre + radius, centre - radius, t.zz],
         [DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0), DVec3::Z],
