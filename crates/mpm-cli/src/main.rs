@@ -93,13 +93,14 @@ enum Command {
         mixing: Vec<f64>,
         /// final strain: ε_yy for uniaxial [default -1e-3], engineering γ_xy for simple
         /// shear [default 0.02].
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         strain: Option<f64>,
         /// load steps.
         #[arg(long, default_value_t = 400)]
         steps: usize,
-        /// simple shear: initial isotropic stress, held vertically (Pa, negative = compression).
-        #[arg(long, default_value_t = -1000.0, allow_negative_numbers = true)]
+        /// simple shear, triaxial and oedometric tests: the initial isotropic stress (Pa,
+        /// negative = compression), held vertically in simple shear, laterally in triaxial.
+        #[arg(long, default_value_t = -1000.0, allow_hyphen_values = true)]
         confining_stress: f64,
         /// test the materials of this scene (any model) instead of the paper's sand; with
         /// --material, only those.
@@ -159,6 +160,11 @@ enum TestKind {
     Uniaxial,
     /// drained simple shear at constant vertical stress.
     SimpleShear,
+    /// drained triaxial compression (--strain < 0, default −2e-3) or extension (> 0) from the
+    /// isotropic --confining-stress held laterally.
+    Triaxial,
+    /// one-dimensional (K0) compression from the isotropic --confining-stress.
+    Oedometric,
 }
 
 fn main() -> ExitCode {
@@ -242,6 +248,8 @@ fn main() -> ExitCode {
             let test = match test {
                 TestKind::Uniaxial => ElementTest::Uniaxial,
                 TestKind::SimpleShear => ElementTest::SimpleShear,
+                TestKind::Triaxial => ElementTest::Triaxial,
+                TestKind::Oedometric => ElementTest::Oedometric,
             };
             let materials = match scene.as_deref().map(|s| scene_materials(s, &material)) {
                 None => Vec::new(),
@@ -260,8 +268,9 @@ fn main() -> ExitCode {
                 materials,
                 shear_rate,
                 strain: strain.unwrap_or(match test {
-                    ElementTest::Uniaxial => -1e-3,
+                    ElementTest::Uniaxial | ElementTest::Oedometric => -1e-3,
                     ElementTest::SimpleShear => 0.02,
+                    ElementTest::Triaxial => -2e-3,
                 }),
                 steps,
                 confining_stress,

@@ -10,7 +10,7 @@
 use std::path::PathBuf;
 
 use mpm_constitutive::element_test::{
-    PathPoint, simple_shear, simple_shear_at_rate, uniaxial_plane_strain,
+    PathPoint, oedometric, simple_shear, simple_shear_at_rate, triaxial, uniaxial_plane_strain,
 };
 use mpm_constitutive::{ConeMatch, DruckerPrager, DruckerPragerParams, SymTensor, TangentModel};
 use mpm_scene::materials::AnyModel;
@@ -31,6 +31,11 @@ pub enum ElementTest {
     Uniaxial,
     /// drained simple shear at constant vertical stress: γ_xy prescribed, ε_xx = ε_zz = 0.
     SimpleShear,
+    /// drained triaxial compression (ε_yy < 0) or extension (> 0) from an isotropic confining
+    /// stress held on x and z.
+    Triaxial,
+    /// one-dimensional (K0) compression: ε_yy prescribed, every other strain zero.
+    Oedometric,
 }
 
 /// Settings of `mpm element-test`.
@@ -117,6 +122,8 @@ fn drive<M: TangentModel>(model: &M, o: &ElementTestOptions) -> Result<Vec<Point
         (ElementTest::SimpleShear, Some(rate)) => {
             simple_shear_at_rate(model, confined, o.strain, o.steps, rate)
         }
+        (ElementTest::Triaxial, _) => triaxial(model, confined, o.strain, o.steps),
+        (ElementTest::Oedometric, _) => oedometric(model, confined, o.strain, o.steps),
     }
     .map_err(|e| RunError::Setup(format!("element test failed: {e}")))?;
     Ok(path.into_iter().map(Point::from).collect())
@@ -136,9 +143,9 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
             o.strain
         )));
     }
-    if o.shear_rate.is_some() && o.test == ElementTest::Uniaxial {
+    if o.shear_rate.is_some() && o.test != ElementTest::SimpleShear {
         return Err(RunError::Arguments(
-            "--shear-rate applies to simple shear; the uniaxial test is strain-controlled at \
+            "--shear-rate applies to simple shear; the other tests are strain-controlled at \
              a quasi-static rate: drop --shear-rate or run `simple-shear`"
                 .into(),
         ));
@@ -189,6 +196,8 @@ pub fn run_element_test(o: &ElementTestOptions) -> Result<Vec<ElementCaseResult>
             ));
             match o.test {
                 ElementTest::Uniaxial => a.push((-e.yy, -s.yy)),
+                ElementTest::Triaxial => a.push((e.yy, s.yy - s.xx)),
+                ElementTest::Oedometric => a.push((-s.yy, -s.xx)),
                 ElementTest::SimpleShear => {
                     a.push((2.0 * e.xy, ev));
                     b.push((2.0 * e.xy, s.xy));
@@ -266,6 +275,24 @@ fn write_plots(test: ElementTest, dir: &std::path::Path, curves: &[Curve]) -> Re
                 "Plane-strain uniaxial compression",
                 "axial strain −ε_yy",
                 "axial stress −σ_yy (Pa)",
+            ),
+            &series(&|c| c.1.clone()),
+        )?,
+        ElementTest::Triaxial => plots::chart(
+            &dir.join("triaxial.png"),
+            &chart(
+                "Drained triaxial test (compression: ε_yy < 0)",
+                "axial strain ε_yy",
+                "deviator σ_yy − σ_xx (Pa)",
+            ),
+            &series(&|c| c.1.clone()),
+        )?,
+        ElementTest::Oedometric => plots::chart(
+            &dir.join("oedometric.png"),
+            &chart(
+                "One-dimensional compression: stress path",
+                "vertical stress −σ_yy (Pa)",
+                "lateral stress −σ_xx (Pa)",
             ),
             &series(&|c| c.1.clone()),
         )?,

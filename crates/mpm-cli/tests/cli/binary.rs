@@ -104,6 +104,51 @@ fn element_test_drives_the_materials_of_a_scene() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A Mohr–Coulomb sand of a scene in the triaxial test: its compression and extension peaks are
+/// the closed forms k σc − c̄ = −317.321 Pa and (σc + c̄)/k = −27.560 Pa (φ 30°, c 5 Pa,
+/// σc = −100 Pa), printed to the millipascal.
+#[test]
+fn element_test_triaxial_peaks_of_a_mohr_coulomb_scene() {
+    let dir = temp_dir("element_triaxial");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("mc.toml");
+    std::fs::write(
+        &scene,
+        "[grid]\nkind = \"regular\"\norigin = [0.0, 0.0]\ncell = [0.1, 0.1]\ncells = [10, 10]\n\
+         [materials.sand]\nkind = \"mohr_coulomb\"\nyoung = 2.0e6\npoisson = 0.3\n\
+         density = 1600.0\ncohesion = 5.0\nfriction_angle_deg = 30.0\n\
+         [[bodies]]\nmaterial = \"sand\"\nshape = \"rectangle\"\nmin = [0.0, 0.0]\n\
+         max = [0.5, 0.5]\n[boundaries]\nground = \"rough\"\n[solver]\nend_time = 0.1\n",
+    )
+    .unwrap();
+    let (scene, out) = (scene.to_str().unwrap(), dir.join("out"));
+    let out = out.to_str().unwrap();
+    // (a negative strain in scientific notation, as a user writes it: clap's negative-number
+    // detection refused `-2e-3` before)
+    for (strain, peak) in [("-2e-3", "-317.321"), ("2e-3", "-27.560")] {
+        let args = [
+            "element-test",
+            "triaxial",
+            "--scene",
+            scene,
+            "--confining-stress",
+            "-100",
+            "--strain",
+            strain,
+            "--steps",
+            "1000",
+            "--out",
+            out,
+            "--force",
+        ];
+        let (code, text, err) = mpm(&args);
+        assert_eq!(code, 0, "{err}");
+        assert!(text.contains(&format!("final σ_yy {peak} Pa")), "{text}");
+    }
+    assert!(dir.join("out/triaxial.png").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A plane DEM: `mpm section` cuts it, a scene takes the same section as its terrain, cuts a
 /// rupture surface into it and fills the mass between the two (its top read back from the CSV
 /// that `mpm section` wrote).
