@@ -167,17 +167,34 @@ fn experiment_height_of(channel: bool, a: f64) -> f64 {
     if channel { a.min(a.powf(0.4)) } else { a.min(0.88 * a.powf(1.0 / 6.0)) }
 }
 
+/// A quasi-2D column's section on its grid: L0, Δx, H0, cells along and up, and the end time
+/// (room for 1.6 × the experiments' runout, 1.3 H0 above; a dozen free-fall times).
+struct Section {
+    l0: f64,
+    dx: f64,
+    h0: f64,
+    nx: u32,
+    ny: u32,
+    end: f64,
+}
+
+impl Section {
+    fn of(c: &Case) -> Self {
+        let l0 = crate::column::L0;
+        let dx = l0 / f64::from(c.resolution);
+        let h0 = c.a * l0;
+        let (_, upper) = experiment_runout_of(true, c.a);
+        let nx = ((l0 * (1.0 + 1.6 * upper) + 2.0 * dx) / dx).ceil() as u32;
+        let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
+        let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(3.0);
+        Self { l0, dx, h0, nx, ny, end }
+    }
+}
+
 /// the 2D scene: a column L0 = 0.2 m wide against a frictionless back wall (the symmetry plane
 /// of a column twice as wide, or the experiment's end wall).
 fn scene_2d(c: &Case) -> String {
-    let l0 = crate::column::L0;
-    let dx = l0 / f64::from(c.resolution);
-    let h0 = c.a * l0;
-    let (_, upper) = experiment_runout(2, c.a);
-    let width = l0 * (1.0 + 1.6 * upper) + 2.0 * dx;
-    let nx = (width / dx).ceil() as u32;
-    let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
-    let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(3.0);
+    let Section { l0, dx, h0, nx, ny, end } = Section::of(c);
     let walls = c.wall_deg.map_or(String::new(), |d| {
         format!("side_walls = {{ width = {CHANNEL}, friction_angle_deg = {d} }}\n")
     });
@@ -234,17 +251,10 @@ fn scene_3d(c: &Case) -> String {
 /// the 3D channel: the 2D scene's column extruded W across, between two Coulomb walls of
 /// friction δ (`back_wall`, `front_wall`): what the 2D side-wall term stands for.
 fn scene_channel(c: &Case, delta: f64) -> String {
-    let l0 = crate::column::L0;
-    let dx = l0 / f64::from(c.resolution);
-    let h0 = c.a * l0;
-    let (_, upper) = experiment_runout_of(true, c.a);
-    let width = l0 * (1.0 + 1.6 * upper) + 2.0 * dx;
-    let nx = (width / dx).ceil() as u32;
-    let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
+    let Section { l0, dx, h0, nx, ny, end } = Section::of(c);
     let nz = (CHANNEL / dx).round() as u32;
     // (the box spans the whole channel: W/Δx cells, whole at every resolution the study uses)
     let depth = f64::from(nz) * dx;
-    let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(3.0);
     format!(
         "title = \"{label}\"\n\
          [grid]\ndimension = 3\nkind = \"regular\"\norigin = [0.0, 0.0, 0.0]\n\

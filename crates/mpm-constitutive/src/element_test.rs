@@ -225,9 +225,21 @@ pub fn uniaxial_plane_strain<M: TangentModel>(
     eps_yy_end: f64,
     n_steps: usize,
 ) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
+    axial(model, sigma0, eps_yy_end, n_steps, [true, false, false, false, false, false])
+}
+
+/// `ε_yy` prescribed from 0 to `eps_yy_end` in `n_steps` equal steps, the components marked in
+/// `held` stress controlled at their start values, every other strain component zero.
+fn axial<M: TangentModel>(
+    model: &M,
+    sigma0: SymTensor,
+    eps_yy_end: f64,
+    n_steps: usize,
+    held: [bool; 6],
+) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
     let n = n_steps.max(1) as f64;
     let control = MixedControl {
-        stress_controlled: [true, false, false, false, false, false],
+        stress_controlled: held,
         increment: [0.0, eps_yy_end / n, 0.0, 0.0, 0.0, 0.0],
         dt: QUASI_STATIC_STEP,
     };
@@ -285,13 +297,7 @@ pub fn triaxial<M: TangentModel>(
     eps_axial_end: f64,
     n_steps: usize,
 ) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
-    let n = n_steps.max(1) as f64;
-    let control = MixedControl {
-        stress_controlled: [true, false, true, false, false, false],
-        increment: [0.0, eps_axial_end / n, 0.0, 0.0, 0.0, 0.0],
-        dt: QUASI_STATIC_STEP,
-    };
-    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+    axial(model, sigma0, eps_axial_end, n_steps, [true, false, true, false, false, false])
 }
 
 /// One-dimensional (oedometric, K0) compression along y: `ε_yy` prescribed from 0 in `n_steps`
@@ -302,13 +308,7 @@ pub fn oedometric<M: TangentModel>(
     eps_yy_end: f64,
     n_steps: usize,
 ) -> Result<Vec<PathPoint<M::State>>, ConstitutiveError> {
-    let n = n_steps.max(1) as f64;
-    let control = MixedControl {
-        stress_controlled: [false; 6],
-        increment: [0.0, eps_yy_end / n, 0.0, 0.0, 0.0, 0.0],
-        dt: QUASI_STATIC_STEP,
-    };
-    run_mixed(model, sigma0, model.initial_state(), &control, n_steps)
+    axial(model, sigma0, eps_yy_end, n_steps, [false; 6])
 }
 
 /// Isotropic compression (`eps_v_end < 0`) or extension (`> 0`): `ε_xx = ε_yy = ε_zz = ε_v/3`

@@ -43,11 +43,12 @@ struct Slide {
     gx: f64,
 }
 
-fn slide<S: ShapeFunctions<N>, const N: usize>(shape: S, transfer: Transfer, gx: f64) -> Slide {
-    let cell = 0.125;
+/// the block 2 m × H on the floor at V0, in its exact static state under gravity (free ends:
+/// σ_yy = −ρ g (H − y), σ_xx = 0, σ_zz = ν σ_yy).
+fn sliding_block() -> mpm_solver::Particles<()> {
     let mut particles = block(
         &Shape::Rectangle { min: Vector::new(0.0, 0.0), max: Vector::new(2.0, H) },
-        cell,
+        0.125,
         2,
         RHO,
         Vector::new(V0, 0.0),
@@ -57,6 +58,11 @@ fn slide<S: ShapeFunctions<N>, const N: usize>(shape: S, transfer: Transfer, gx:
         s.yy = -RHO * G * (H - x.y);
         s.zz = NU * s.yy;
     }
+    particles
+}
+
+fn slide<S: ShapeFunctions<N>, const N: usize>(shape: S, transfer: Transfer, gx: f64) -> Slide {
+    let particles = sliding_block();
     let config = SolverConfig {
         boundaries: Boundaries {
             ground: Some(Friction::Coulomb { mu: 0.0 }),
@@ -173,18 +179,7 @@ fn a_block_between_side_walls_decelerates_at_mu_nu_g_h_over_w() {
 /// the only decelerating force in the case above).
 #[test]
 fn without_side_walls_the_block_keeps_its_speed() {
-    let mut particles = block(
-        &Shape::Rectangle { min: Vector::new(0.0, 0.0), max: Vector::new(2.0, H) },
-        0.125,
-        2,
-        RHO,
-        Vector::new(V0, 0.0),
-        (),
-    );
-    for (s, x) in particles.stress.iter_mut().zip(&particles.position) {
-        s.yy = -RHO * G * (H - x.y);
-        s.zz = NU * s.yy;
-    }
+    let particles = sliding_block();
     let config = SolverConfig {
         boundaries: Boundaries {
             ground: Some(Friction::Coulomb { mu: 0.0 }),
