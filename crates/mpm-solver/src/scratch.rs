@@ -176,6 +176,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     pub(crate) acceleration: Vec<Vector>,
     /// v_i^L = v_i + a_i Δt (eq 5) per active node, formed once for APIC's grid to particle.
     pub(crate) end_velocity: Vec<Vector>,
+    /// APIC's light-node mass of this step, C² m_cell (`stages/g2p.rs`): a node lighter than
+    /// this gives the affine matrix no acceleration of its own.
+    pub(crate) light_mass: Real,
     /// Nodes on a declared boundary or near a wall.
     pub(crate) boundary: Vec<BoundaryNode>,
     /// The planes of the boundary nodes (`BoundaryNode::planes`).
@@ -243,6 +246,7 @@ impl<F, const N: usize> Scratch<F, N> {
             force: Vec::new(),
             acceleration: Vec::new(),
             end_velocity: Vec::new(),
+            light_mass: 0.0,
             boundary: Vec::new(),
             node_planes: Vec::new(),
             plane_buf: Vec::new(),

@@ -27,7 +27,7 @@ use crate::config::{Scheme, SolverConfig, Transfer};
 use crate::consistent::Solve;
 use crate::energy::{Dissipation, EnergyLedger};
 use crate::error::SolverError;
-use crate::math::{Matrix, Real, Vector};
+use crate::math::{DIM, Matrix, Real, Vector};
 use crate::par;
 use crate::particles::Particles;
 use crate::report::{BranchCounts, Checkpoint, RunEnd, StepReport};
@@ -77,6 +77,9 @@ pub struct Solver<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     pub(crate) initial_stored: Real,
     /// Absolute small-mass threshold (kg per metre).
     pub(crate) small_mass: Real,
+    /// The mass of one cell L^d full of the particles' mean reference density (kg; kg per metre
+    /// in plane strain): APIC's light-node scale (`stages/g2p.rs`).
+    pub(crate) cell_mass: Real,
     /// Smallest cell size L of eq 13 (m).
     pub(crate) cell_size: Real,
     /// The P-wave modulus M (λ + 2G for elasticity) of each material's model at its initial
@@ -216,6 +219,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let signal_cap =
             p_modulus.iter().zip(&reference_density).map(|(m, r)| signal_cap(*m, *r)).collect();
         let small_mass = config.small_mass_ratio * mean_mass;
+        // From the reference densities (kept by checkpoints), so that a resumed run has the same.
+        let reference_volume: Real = (0..particles.len())
+            .map(|i| particles.mass[i] / reference_density[usize::from(particles.material[i])])
+            .sum();
+        let cell_mass = particles.total_mass() / reference_volume * cell_size.powi(DIM as i32);
         let mut solver = Self {
             shape,
             materials,
@@ -227,6 +235,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             loads,
             initial_stored: checkpoint.initial_stored,
             small_mass,
+            cell_mass,
             cell_size,
             p_modulus,
             reference_density,
@@ -462,6 +471,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             });
         }
         let (dt, courant) = self.time_step(max_dt)?;
+        self.scratch.light_mass = courant * courant * self.cell_mass;
         // While gravity ramps, its potential −m g(t)·x changes at fixed x: that is external work,
         // Σ −m_p Δg·x_p at mid-step positions (the forces use g at mid-step too).
         let ramping = self.config.gravity_ramp > 0.0 && self.time < self.config.gravity_ramp;

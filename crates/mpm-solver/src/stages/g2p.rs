@@ -19,7 +19,7 @@
 //! into strain energy, at the next step.
 
 use mpm_constitutive::ConstitutiveModel;
-use mpm_grid::ShapeFunctions;
+use mpm_grid::{ShapeFunctions, stencil_nodes};
 use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
@@ -156,6 +156,18 @@ fn flip_update<S: ShapeFunctions<N>, const N: usize>(
 
 /// the APIC update: v_p = Σ v_i^L S_ip, C_p = Σ v_i^L ⊗ G_ip, x_p += Δt v_p, with the end
 /// velocities v_i^L of `scratch.end_velocity`; generic over the shape functions alone.
+///
+/// **Light nodes.** A node a particle has only just reached holds a small fraction ξ of a cell's
+/// mass but a full share of the particle's internal force, so its acceleration f_i/m_i grows like
+/// 1/ξ. Its weight S_ip ~ ξ tames that in v_p, but its gradient G_ip does not: C_p would carry the
+/// 1/ξ into the next particle-to-grid transfer, and with it into every scheme's strains (the
+/// multilinear functions' D_p = Σ S_ip (x_i − x_p)⊗(x_i − x_p) vanishes at a node plane). An
+/// explicit node is stable while Δt² k_i / m_i stays below 4, which for a node of mass ξ m_cell
+/// means ξ ≳ C²/4 (C the step's Courant number). A node lighter than C² m_cell
+/// (`scratch.light_mass`, a factor 4 of margin) enters C_p with the particle's own affine velocity
+/// v_p + C_p^n (x_i − x_p) instead of v_i^L: no acceleration of its own, and an affine field is
+/// still reproduced exactly (Σ_i (x_i − x_p) ⊗ G_ip = I). Only particles with a light node in
+/// their stencil pay for the second gather.
 fn apic_update<S: ShapeFunctions<N>, const N: usize>(
     shape: &S,
     sc: &Scratch<S::Factors, N>,
@@ -164,7 +176,8 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
     step: u64,
 ) -> Result<(), SolverError> {
     let (idx, factors) = (&sc.node_index, &sc.factors);
-    let end = &sc.end_velocity;
+    let (end, mass, light) = (&sc.end_velocity, &sc.mass, sc.light_mass);
+    let first = &sc.first_node;
     let chunk = chunk_len(position.len());
     let failure = position
         .par_chunks_mut(chunk)
@@ -174,7 +187,20 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
         .map(|(c, ((xs, vs), cs))| {
             for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
                 let q = c * chunk + j;
-                let (v_new, c_new) = shape.interpolate(&factors[q], |k| end[idx[q][k] as usize]);
+                let (v_new, mut c_new) =
+                    shape.interpolate(&factors[q], |k| end[idx[q][k] as usize]);
+                if idx[q].iter().any(|&i| mass[i as usize] < light) {
+                    let nodes = stencil_nodes::<N>(first[q]);
+                    let (x0, c0) = (*x, *cp);
+                    c_new = shape.gradient(&factors[q], |k| {
+                        let i = idx[q][k] as usize;
+                        if mass[i] < light {
+                            v_new + c0 * (shape.node_position(nodes[k]) - x0)
+                        } else {
+                            end[i]
+                        }
+                    });
+                }
                 let x_new = *x + dt * v_new;
                 check_finite(step, q, *x, x_new, v_new)?;
                 *x = x_new;
