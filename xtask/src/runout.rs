@@ -119,6 +119,9 @@ pub struct Case {
     /// extruded across a channel between two Coulomb walls (`None`: plane strain without walls;
     /// in 3D the axisymmetric quarter column).
     pub wall_deg: Option<f64>,
+    /// the FLIP update's PIC share β per step (`None`: the granular default, a relaxation time
+    /// τ = 2 √(Δx/g)).
+    pub pic: Option<f64>,
 }
 
 impl Case {
@@ -129,8 +132,9 @@ impl Case {
             (_, None) => "plane strain".to_string(),
             (_, Some(d)) => format!("side walls W = {CHANNEL} m, δ = {d}°"),
         };
+        let pic = self.pic.map_or(String::new(), |b| format!(" β {b:e}"));
         format!(
-            "{}D a = {} {} {} {} res {}",
+            "{}D a = {} {} {} {} res {}{pic}",
             self.dim,
             self.a,
             self.model.name(),
@@ -138,6 +142,11 @@ impl Case {
             walls,
             self.resolution
         )
+    }
+
+    /// the `[solver]` line of a PIC share other than the default.
+    fn pic_toml(&self) -> String {
+        self.pic.map_or(String::new(), |b| format!("pic_fraction = {b:e}\n"))
     }
 }
 
@@ -205,12 +214,13 @@ fn scene_2d(c: &Case) -> String {
          [[bodies]]\nname = \"column\"\nmaterial = \"sand\"\nshape = \"rectangle\"\n\
          min = [0.0, 0.0]\nmax = [{l0}, {h0}]\nparticles_per_cell = 2\n\
          [boundaries]\nground = {ground}\nleft_wall = \"frictionless\"\n{walls}\
-         [solver]\nend_time = {end}\n\
+         [solver]\n{pic}end_time = {end}\n\
          stop_at_rest = {{ kinetic_fraction = {REST}, duration = 0.3 }}\n\
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
+        pic = c.pic_toml(),
     )
 }
 
@@ -239,12 +249,13 @@ fn scene_3d(c: &Case) -> String {
          vertices = [{arc}]\nfrom = 0.0\nto = {h0}\n\
          [boundaries]\nground = {ground}\nleft_wall = \"frictionless\"\n\
          back_wall = \"frictionless\"\n\
-         [solver]\nend_time = {end}\n\
+         [solver]\n{pic}end_time = {end}\n\
          stop_at_rest = {{ kinetic_fraction = {REST}, duration = 0.3 }}\n\
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
+        pic = c.pic_toml(),
     )
 }
 
@@ -264,12 +275,13 @@ fn scene_channel(c: &Case, delta: f64) -> String {
          min = [0.0, 0.0, 0.0]\nmax = [{l0}, {h0}, {depth}]\n\
          [boundaries]\nground = {ground}\nleft_wall = \"frictionless\"\n\
          back_wall = {{ friction_angle_deg = {delta} }}\nfront_wall = {{ friction_angle_deg = {delta} }}\n\
-         [solver]\nend_time = {end}\n\
+         [solver]\n{pic}end_time = {end}\n\
          stop_at_rest = {{ kinetic_fraction = {REST}, duration = 0.3 }}\n\
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
+        pic = c.pic_toml(),
     )
 }
 
@@ -336,6 +348,7 @@ pub fn cases(quick: bool) -> Vec<Case> {
         base,
         resolution,
         wall_deg,
+        pic: None,
     };
     if quick {
         out.push(case(2, 1.0, Model::MohrCoulomb, Base::Rough, 10, Some(20.0)));
@@ -370,6 +383,17 @@ pub fn cases(quick: bool) -> Vec<Case> {
     for &a in &[1.0, 2.0] {
         out.push(case(3, a, Model::MohrCoulomb, Base::Rough, 10, Some(25.0)));
     }
+    // the FLIP update's PIC share per step, 0.001 (the granular default until it became a
+    // relaxation time) and 1e-4: how much of the runout is the transfer's numerical damping
+    // (Mohr–Coulomb, quarter columns and quasi-2D sections)
+    for pic in [Some(1e-3), Some(1e-4)] {
+        for &a in &[1.0, 2.0] {
+            out.push(Case { pic, ..case(3, a, Model::MohrCoulomb, Base::Rough, 8, None) });
+            for d in [None, Some(15.0), Some(25.0)] {
+                out.push(Case { pic, ..case(2, a, Model::MohrCoulomb, Base::Rough, 20, d) });
+            }
+        }
+    }
     out
 }
 
@@ -378,8 +402,8 @@ pub fn run(quick: bool) -> anyhow::Result<bool> {
     let dir = crate::out_dir("runout")?;
     let only: Option<String> = std::env::var("RUNOUT_ONLY").ok();
     let mut csv = String::from(
-        "dim,a,model,base,side_wall_deg,resolution,status,runout,experiment_low,experiment_high,\
-         runout_error,height,experiment_height,height_error,steps,particles,wall_s\n",
+        "dim,a,model,base,side_wall_deg,pic_fraction,resolution,status,runout,experiment_low,\
+         experiment_high,runout_error,height,experiment_height,height_error,steps,particles,wall_s\n",
     );
     let mut rows = Vec::new();
     let mut ok = true;
@@ -422,12 +446,13 @@ pub fn run(quick: bool) -> anyhow::Result<bool> {
         );
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             c.dim,
             c.a,
             c.model.name(),
             c.base.name(),
             c.wall_deg.map_or("none".into(), |d| d.to_string()),
+            c.pic.map_or("tau".into(), |b| b.to_string()),
             c.resolution,
             o.status.replace(',', ";"),
             o.runout,
@@ -469,9 +494,9 @@ fn table(rows: &[Row]) -> String {
          and the experiments' laws). Runout is (L∞ − L0)/L0 in 2D, (R∞ − R0)/R0 in 3D; height \
          is H∞/L0 (H∞/R0); errors are against the experiments' law (against the nearer edge of \
          the band between the two laws for 1.8 < a < 2.8 in 2D).\n\n\
-         | dim | a | model | base | walls | L0/Δx | status | runout | experiments | error | \
-         height | experiments | error | steps | particles | wall (s) |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | dim | a | model | base | walls | PIC β | L0/Δx | status | runout | experiments | \
+         error | height | experiments | error | steps | particles | wall (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (c, o, (low, high, err, h, herr)) in rows {
         let walls = match (c.dim, c.wall_deg) {
@@ -483,13 +508,14 @@ fn table(rows: &[Row]) -> String {
         let exp = if low == high { format!("{low:.2}") } else { format!("{low:.2}–{high:.2}") };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {:.3} | {} | {:+.1} % | {:.3} | {:.2} | \
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {} | {:+.1} % | {:.3} | {:.2} | \
              {:+.1} % | {} | {} | {:.0} |",
             c.dim,
             c.a,
             c.model.name(),
             c.base.name(),
             walls,
+            c.pic.map_or("τ = 2√(Δx/g)".into(), |b| format!("{b:e} per step")),
             c.resolution,
             o.status,
             o.runout,
@@ -513,6 +539,7 @@ fn table(rows: &[Row]) -> String {
                     && d.model == c.model
                     && d.base == c.base
                     && d.wall_deg == c.wall_deg
+                    && d.pic == c.pic
                     && d.resolution == r
             })
         };

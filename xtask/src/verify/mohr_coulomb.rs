@@ -108,6 +108,7 @@ pub(super) fn runout_rows(rows: &mut Rows, quick: bool) {
         base: Base::Rough,
         resolution: 10,
         wall_deg,
+        pic: None,
     };
     let c = case(2, 1.0, Some(20.0));
     let name = "column a = 1, Mohr–Coulomb φ 29.5°, side walls 0.1 m δ 20°, L0/Δx = 10";

@@ -930,6 +930,8 @@ fn config(
         mpm_solver::Transfer::Apic => Transfer::Apic,
     };
     let flip = transfer == Transfer::Flip;
+    let (pic_fraction, pic_relaxation) =
+        solver::pic_share(s, flip, materials, grid.min_cell_size(), gravity.length());
     let config = SolverConfig {
         scheme: match settings.scheme {
             mpm_solver::Scheme::Usl => Scheme::Usl,
@@ -949,7 +951,8 @@ fn config(
         objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
         gravity_ramp: settings.gravity_ramp,
         transfer,
-        pic_fraction: s.pic_fraction.unwrap_or(if flip { materials.pic_fraction() } else { 0.0 }),
+        pic_fraction,
+        pic_relaxation,
         separation_density: s.separation_density.unwrap_or(if flip {
             materials.separation_density()
         } else {

@@ -45,7 +45,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             &self.scratch,
             (&mut p.position, &mut p.velocity, &p.mass),
             dt,
-            self.config.pic_fraction,
+            self.config.pic_share(dt),
             self.step + 1,
         );
         let mut removed = 0.0;
@@ -250,14 +250,20 @@ mod tests {
     /// strain). Returns (initial kinetic energy, kinetic energy, transfer dissipation, residual)
     /// after `steps` steps with PIC share `beta`.
     fn null_mode(beta: f64, steps: usize) -> (f64, f64, f64, f64) {
+        let config =
+            SolverConfig { gravity: Vector::ZERO, pic_fraction: beta, ..Default::default() };
+        let (ke0, ke, transfer, residual, _) = null_mode_with(config, steps);
+        (ke0, ke, transfer, residual)
+    }
+
+    /// [`null_mode`] under `config`, with the time reached.
+    fn null_mode_with(config: SolverConfig, steps: usize) -> (f64, f64, f64, f64, f64) {
         let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.5), [8, 8]).unwrap();
         let mut particles = Particles::default();
         for v in [Vector::new(0.3, -0.2), Vector::new(-0.3, 0.2)] {
             let x = Vector::new(2.1, 1.7);
             particles.push(NewParticle::unstressed(x, v, 0.0625, 1000.0, ()));
         }
-        let config =
-            SolverConfig { gravity: Vector::ZERO, pic_fraction: beta, ..Default::default() };
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
         let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
         let e0 = s.energy();
@@ -265,7 +271,32 @@ mod tests {
             s.step().unwrap();
         }
         let e = s.energy();
-        (e0.kinetic, e.kinetic, e.transfer_dissipation, e.residual)
+        (e0.kinetic, e.kinetic, e.transfer_dissipation, e.residual, s.time())
+    }
+
+    /// Given as a relaxation time τ, the PIC share takes the null-space motion's kinetic energy
+    /// down as exp(−2t/τ) whatever the time step: at Courant 0.1 and 0.5 (Δt five times
+    /// longer) alike, the closed form holds to rounding, where a share per step would damp five
+    /// times more per second at the shorter step.
+    #[test]
+    fn a_pic_relaxation_time_damps_at_the_same_rate_whatever_the_time_step() {
+        let tau = 0.01;
+        for (courant, steps) in [(0.1, 400), (0.5, 80)] {
+            let config = SolverConfig {
+                gravity: Vector::ZERO,
+                pic_relaxation: tau,
+                time_step: crate::TimeStep::Courant(courant),
+                ..Default::default()
+            };
+            let (ke0, ke, transfer, residual, t) = null_mode_with(config, steps);
+            let expected = ke0 * (-2.0 * t / tau).exp();
+            eprintln!("Courant {courant}: t = {t:.4e} s, KE/KE0 = {:.6e}", ke / ke0);
+            // a few hundred rounded factors: a few ulps each
+            assert!((ke - expected).abs() <= 1e-12 * ke0, "kinetic {ke} against {expected}");
+            assert!((transfer - (ke0 - ke)).abs() <= 1e-12 * ke0, "booked {transfer}");
+            assert!(residual.abs() <= 1e-12 * ke0, "residual {residual}");
+            assert!(ke < 0.5 * ke0, "the test must damp measurably: {ke} of {ke0}");
+        }
     }
 
     /// Pure FLIP keeps the null-space motion for ever; a PIC share β takes (1 − β)² of its
@@ -300,5 +331,18 @@ mod tests {
             ..Default::default()
         }));
         assert!(!bad(SolverConfig { pic_fraction: 1.0, ..Default::default() }));
+        assert!(bad(SolverConfig { pic_relaxation: -1.0, ..Default::default() }));
+        assert!(bad(SolverConfig { pic_relaxation: f64::INFINITY, ..Default::default() }));
+        assert!(bad(SolverConfig {
+            pic_relaxation: 0.1,
+            pic_fraction: 0.01,
+            ..Default::default()
+        }));
+        assert!(bad(SolverConfig {
+            pic_relaxation: 0.1,
+            transfer: crate::Transfer::Apic,
+            ..Default::default()
+        }));
+        assert!(!bad(SolverConfig { pic_relaxation: 0.1, ..Default::default() }));
     }
 }
