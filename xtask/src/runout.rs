@@ -102,6 +102,24 @@ impl Base {
     }
 }
 
+/// A PIC share other than the default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Pic {
+    /// β per step (`pic_fraction`).
+    PerStep(f64),
+    /// a relaxation time of this many √(Δx/g) (`pic_relaxation`).
+    Relaxation(f64),
+}
+
+impl Pic {
+    fn name(self) -> String {
+        match self {
+            Pic::PerStep(b) => format!("{b:e} per step"),
+            Pic::Relaxation(k) => format!("τ = {k} √(Δx/g)"),
+        }
+    }
+}
+
 /// One collapse.
 #[derive(Clone, Debug)]
 pub struct Case {
@@ -119,9 +137,8 @@ pub struct Case {
     /// extruded across a channel between two Coulomb walls (`None`: plane strain without walls;
     /// in 3D the axisymmetric quarter column).
     pub wall_deg: Option<f64>,
-    /// the FLIP update's PIC share β per step (`None`: the granular default, a relaxation time
-    /// τ = 2 √(Δx/g)).
-    pub pic: Option<f64>,
+    /// the FLIP update's PIC share (`None`: the granular default, 0.001 per step).
+    pub pic: Option<Pic>,
 }
 
 impl Case {
@@ -132,7 +149,10 @@ impl Case {
             (_, None) => "plane strain".to_string(),
             (_, Some(d)) => format!("side walls W = {CHANNEL} m, δ = {d}°"),
         };
-        let pic = self.pic.map_or(String::new(), |b| format!(" β {b:e}"));
+        let pic = self.pic.map_or(String::new(), |p| match p {
+            Pic::PerStep(b) => format!(" β {b:e}"),
+            Pic::Relaxation(k) => format!(" τ {k}"),
+        });
         format!(
             "{}D a = {} {} {} {} res {}{pic}",
             self.dim,
@@ -144,9 +164,13 @@ impl Case {
         )
     }
 
-    /// the `[solver]` line of a PIC share other than the default.
-    fn pic_toml(&self) -> String {
-        self.pic.map_or(String::new(), |b| format!("pic_fraction = {b:e}\n"))
+    /// the `[solver]` line of a PIC share other than the default, on cells of `dx`.
+    fn pic_toml(&self, dx: f64) -> String {
+        match self.pic {
+            None => String::new(),
+            Some(Pic::PerStep(b)) => format!("pic_fraction = {b:e}\n"),
+            Some(Pic::Relaxation(k)) => format!("pic_relaxation = {}\n", k * (dx / 9.81).sqrt()),
+        }
     }
 }
 
@@ -220,7 +244,7 @@ fn scene_2d(c: &Case) -> String {
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
-        pic = c.pic_toml(),
+        pic = c.pic_toml(dx),
     )
 }
 
@@ -255,7 +279,7 @@ fn scene_3d(c: &Case) -> String {
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
-        pic = c.pic_toml(),
+        pic = c.pic_toml(dx),
     )
 }
 
@@ -281,7 +305,7 @@ fn scene_channel(c: &Case, delta: f64) -> String {
         label = c.label(),
         material = c.model.toml(),
         ground = c.base.toml(),
-        pic = c.pic_toml(),
+        pic = c.pic_toml(dx),
     )
 }
 
@@ -383,10 +407,10 @@ pub fn cases(quick: bool) -> Vec<Case> {
     for &a in &[1.0, 2.0] {
         out.push(case(3, a, Model::MohrCoulomb, Base::Rough, 10, Some(25.0)));
     }
-    // the FLIP update's PIC share per step, 0.001 (the granular default until it became a
-    // relaxation time) and 1e-4: how much of the runout is the transfer's numerical damping
+    // the FLIP update's PIC share: 1e-4 per step and a relaxation time 2 √(Δx/g) beside the
+    // default 0.001 per step: how much of the runout is the transfer's numerical damping
     // (Mohr–Coulomb, quarter columns and quasi-2D sections)
-    for pic in [Some(1e-3), Some(1e-4)] {
+    for pic in [Some(Pic::PerStep(1e-4)), Some(Pic::Relaxation(2.0))] {
         for &a in &[1.0, 2.0] {
             out.push(Case { pic, ..case(3, a, Model::MohrCoulomb, Base::Rough, 8, None) });
             for d in [None, Some(15.0), Some(25.0)] {
@@ -452,7 +476,7 @@ pub fn run(quick: bool) -> anyhow::Result<bool> {
             c.model.name(),
             c.base.name(),
             c.wall_deg.map_or("none".into(), |d| d.to_string()),
-            c.pic.map_or("tau".into(), |b| b.to_string()),
+            c.pic.map_or("0.001 per step".into(), Pic::name),
             c.resolution,
             o.status.replace(',', ";"),
             o.runout,
@@ -515,7 +539,7 @@ fn table(rows: &[Row]) -> String {
             c.model.name(),
             c.base.name(),
             walls,
-            c.pic.map_or("τ = 2√(Δx/g)".into(), |b| format!("{b:e} per step")),
+            c.pic.map_or("0.001 per step".into(), Pic::name),
             c.resolution,
             o.status,
             o.runout,

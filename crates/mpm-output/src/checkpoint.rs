@@ -38,8 +38,10 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// carries a 3D run's hazard maps; 10: the hazard maps no longer carry a floor height, the
 /// grid's ground gives it; 11: the solver state carries each boundary's loads, the history the
 /// wall-load series; 12: the dissipation and the energy rows carry the side walls' friction, the
-/// solver settings the side walls, the scene registry a Mohr–Coulomb run's state).
-pub const FORMAT: u32 = 12;
+/// solver settings the side walls, the scene registry a Mohr–Coulomb run's state; 13: no
+/// layout change, but APIC's light nodes keep the particle's affine velocity, so an older APIC
+/// run resumed would change its numerics mid-run).
+pub const FORMAT: u32 = 13;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

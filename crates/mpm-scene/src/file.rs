@@ -378,15 +378,13 @@ pub struct SolverSpec {
     #[serde(default)]
     pub transfer: Option<Transfer>,
     /// the PIC share of a FLIP transfer per step, 0 ≤ β ≤ 1
-    /// (`mpm_solver::SolverConfig::pic_fraction`); exclusive with `pic_relaxation`. Default 0:
-    /// granular materials get a relaxation time instead (`pic_relaxation`).
+    /// (`mpm_solver::SolverConfig::pic_fraction`): default 0.001 for granular materials (their
+    /// deposits come to rest), 0 for elastic ones and with APIC; not with `pic_relaxation`.
     #[serde(default)]
     pub pic_fraction: Option<f64>,
-    /// the PIC share of a FLIP transfer as a relaxation time τ (s): β = 1 − exp(−Δt/τ) each step
-    /// (`mpm_solver::SolverConfig::pic_relaxation`). Default for granular materials
-    /// [`crate::GRANULAR_PIC_RELAXATION`] × √(L/g) (L the smallest cell, g gravity's magnitude;
-    /// without gravity a share of [`crate::GRANULAR_PIC_FRACTION`] per step), 0 for elastic ones
-    /// and with APIC.
+    /// the PIC share of a FLIP transfer as a relaxation time τ (s): β = 1 − exp(−Δt/τ) each step,
+    /// the same damping per second whatever Δt (`mpm_solver::SolverConfig::pic_relaxation`); not
+    /// with `pic_fraction`. Default none.
     #[serde(default)]
     pub pic_relaxation: Option<f64>,
     /// below this fraction of its material's reference density a particle is a separated grain

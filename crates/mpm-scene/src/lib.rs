@@ -55,8 +55,8 @@ pub use error::SceneError;
 pub use ground::{ground_height, segment_at, surface};
 pub use scene::{
     DEFAULT_ENERGY_ALARM, DEFAULT_MAX_STEPS, EnergyAlarm, GRANULAR_PIC_FRACTION,
-    GRANULAR_PIC_RELAXATION, GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt,
-    Reference, Resolved, ResolvedOutput, Scene, SectionLine, Seed, StopAtRest, Warning, fnv1a,
+    GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
+    ResolvedOutput, Scene, SectionLine, Seed, StopAtRest, Warning, fnv1a,
 };
 pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
 pub use space::{SpaceGrid, SpaceScene, declared_dimension, dispatch_space};

@@ -212,23 +212,20 @@ pub enum InitialState {
 /// −40 %, a sand block dropped 100 m between walls −22 % (it bounces 8 m high).
 pub const DEFAULT_ENERGY_ALARM: f64 = 0.2;
 
-/// The PIC share per step of scenes of granular materials (Drucker-Prager, Mohr–Coulomb, μ(I))
-/// without gravity, where [`GRANULAR_PIC_RELAXATION`] has no scale; elastic scenes keep the
-/// paper's pure FLIP. With gravity, the share is [`GRANULAR_PIC_RELAXATION`]'s per step.
+/// Default `[solver] pic_fraction` of scenes of granular materials (Drucker-Prager, Mohr–Coulomb,
+/// μ(I)); elastic scenes keep the paper's pure FLIP. The smallest share per step measured to
+/// bring every deposit to rest: the flume run to 60 s keeps at most 3.9e-7 of its peak kinetic
+/// energy after 5 s (pure FLIP: 6 J/m for ever, and a grain thrown out at 22.65 s; 1e-4 per step:
+/// 1.5e-4, and a grain 0.6 m beyond the front), and the column collapses of
+/// `cargo xtask verify --quick` come to rest. A share per step damps at the rate β/Δt, so the
+/// answer follows Δt (the stiffness, the Courant number): a 3D column ran (R∞ − R0)/R0 = 0.865
+/// at Courant 0.1 and 1.004 at 0.3, and 0.838 against 1.242 with 1e-4 per step
+/// (`docs/runout.md`). `[solver] pic_relaxation` gives the share as a relaxation time instead,
+/// the same damping per second whatever Δt; as τ = 2 √(L/g) it left an a = 0.5 column of
+/// `cargo xtask verify --quick` at 8.9e-6 of its peak kinetic energy and threw a grain of another,
+/// which is why it is not the default. Ten times more (0.01 per step) shortens a = 0.5 to 2
+/// collapses by a third.
 pub const GRANULAR_PIC_FRACTION: f64 = 0.001;
-
-/// Default `[solver] pic_relaxation` of scenes of granular materials, in units of √(L/g) (L the
-/// smallest cell, g gravity's magnitude): τ = 2 √(L/g), the settling time of a grain over a
-/// cell, twice. The PIC share then damps the grid-invisible velocities at the same rate per
-/// second whatever Δt, which the stiffness and the Courant number set: with a share of 0.001
-/// per step (the default until this one) a 3D column collapse (a = 1, R0/Δx = 6) ran
-/// (R∞ − R0)/R0 = 0.865 at Courant 0.1 and 1.004 at 0.3, and 0.838 against 1.242 with a share
-/// of 1e-4 at R0/Δx = 8 (`docs/runout.md`). On the flume's 0.1 m cells (Δt ≈ 2e-4 s) τ = 0.20 s,
-/// a share of about 0.001 per step: the one measured to bring every deposit to rest there
-/// (the flume run to 60 s keeps at most 3.9e-7 of its peak kinetic energy after 5 s; a share of
-/// 1e-4 lets a grain fly 0.6 m beyond the front). Ten times more (0.01 per step) shortens
-/// a = 0.5 to 2 collapses by a third.
-pub const GRANULAR_PIC_RELAXATION: f64 = 2.0;
 
 /// Default `[solver] separation_density` of Drucker-Prager scenes (μ(I) tracks its own opening):
 /// a particle below half its material's reference density is a separated grain and carries no

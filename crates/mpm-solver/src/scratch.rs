@@ -179,6 +179,8 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// APIC's light-node mass of this step, C² m_cell (`stages/g2p.rs`): a node lighter than
     /// this gives the affine matrix no acceleration of its own.
     pub(crate) light_mass: Real,
+    /// Per active node, whether APIC's grid to particle counts it light (`stages/g2p.rs`).
+    pub(crate) light: Vec<bool>,
     /// Nodes on a declared boundary or near a wall.
     pub(crate) boundary: Vec<BoundaryNode>,
     /// The planes of the boundary nodes (`BoundaryNode::planes`).
@@ -247,6 +249,7 @@ impl<F, const N: usize> Scratch<F, N> {
             acceleration: Vec::new(),
             end_velocity: Vec::new(),
             light_mass: 0.0,
+            light: Vec::new(),
             boundary: Vec::new(),
             node_planes: Vec::new(),
             plane_buf: Vec::new(),
@@ -283,6 +286,7 @@ impl<F, const N: usize> Scratch<F, N> {
                 + 2 * self.wall_ghosts.capacity())
                 * size_of::<u32>()
             + self.base.capacity()
+            + self.light.capacity()
             + self.node_local.capacity()
             + self.referenced.capacity()
             + self.neighbours.capacity() * size_of::<[u32; NEIGHBOURS]>()

@@ -320,7 +320,6 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         &settings,
         (boundaries, periodic, walls, side_walls),
         &materials,
-        solver::min_cell(&grid),
     )?;
     let initial_dt =
         solver::first_dt(ctx, &f.solver, &config, &grid, &materials, &seeds, settings.max_steps)?;

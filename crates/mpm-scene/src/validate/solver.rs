@@ -194,15 +194,13 @@ pub(super) fn config(
         Option<mpm_solver::SideWalls>,
     ),
     materials: &MaterialsBuilt,
-    min_cell: f64,
 ) -> Result<SolverConfig, SceneError> {
     let transfer = s.transfer.unwrap_or_default();
     // Under APIC neither default applies: APIC damps the grid-invisible noise itself, and a
     // stress-free grain keeps its affine stretching for ever, so separated grains would expand
     // without bound (a = 1 column collapse: thrown to 1.5 × the column's height, measured).
     let flip = transfer == mpm_solver::Transfer::Flip;
-    let (pic_fraction, pic_relaxation) =
-        pic_share(s, flip, materials, min_cell, settings.gravity.length());
+    let (pic_fraction, pic_relaxation) = pic_share(ctx, s, flip, materials)?;
     let separation_default = if flip { materials.separation_density() } else { 0.0 };
     let config = SolverConfig {
         scheme: settings.scheme,
@@ -227,31 +225,30 @@ pub(super) fn config(
 }
 
 /// The PIC share of a scene's transfer as (per step, relaxation time τ in s), one of them 0:
-/// what the scene gives (the solver refuses both), else under FLIP for granular materials
-/// τ = [`crate::GRANULAR_PIC_RELAXATION`] √(L/g), L the smallest cell `min_cell` and g
-/// `gravity` (without gravity [`crate::GRANULAR_PIC_FRACTION`] per step), else none.
+/// what the scene gives (one key at most), else under FLIP for granular materials
+/// [`crate::GRANULAR_PIC_FRACTION`] per step, else none.
 pub(super) fn pic_share(
+    ctx: &Ctx<'_>,
     s: &SolverSpec,
     flip: bool,
     materials: &MaterialsBuilt,
-    min_cell: f64,
-    gravity: f64,
-) -> (f64, f64) {
-    if s.pic_fraction.is_some() || s.pic_relaxation.is_some() {
-        return (s.pic_fraction.unwrap_or(0.0), s.pic_relaxation.unwrap_or(0.0));
-    }
-    let per_step = materials.pic_fraction();
-    if !flip || per_step == 0.0 {
-        (0.0, 0.0)
-    } else if gravity > 0.0 && min_cell > 0.0 {
-        (0.0, crate::GRANULAR_PIC_RELAXATION * (min_cell / gravity).sqrt())
-    } else {
-        (per_step, 0.0)
+) -> Result<(f64, f64), SceneError> {
+    match (s.pic_fraction, s.pic_relaxation) {
+        (Some(_), Some(_)) => Err(ctx.err(
+            "solver.pic_relaxation",
+            None,
+            "cannot go with `pic_fraction`",
+            "the PIC share is given either per step or as a relaxation time, not both",
+            "remove one of `pic_fraction` and `pic_relaxation`",
+        )),
+        (Some(beta), None) => Ok((beta, 0.0)),
+        (None, Some(tau)) => Ok((0.0, tau)),
+        (None, None) => Ok((if flip { materials.pic_fraction() } else { 0.0 }, 0.0)),
     }
 }
 
 /// the smallest cell size of a 2D grid (m).
-pub(super) fn min_cell(grid: &GridBuilt) -> f64 {
+fn min_cell(grid: &GridBuilt) -> f64 {
     match grid {
         GridBuilt::Terrain(t) => t.min_cell_size(),
         GridBuilt::Regular(r) => r.min_cell_size(),
@@ -369,20 +366,17 @@ mod tests {
     use crate::scenes::embedded_scene;
     use crate::validate::load_scene_str;
 
-    /// A granular scene's PIC share is a relaxation time τ = 2 √(L/g) unless the scene gives a
-    /// share per step (or a time) of its own; under APIC there is none.
+    /// A granular scene's PIC share is 0.001 per step unless the scene gives a share per step
+    /// or a relaxation time of its own (both at once are refused: `malformed/`); under APIC
+    /// there is none.
     #[test]
-    fn granular_scenes_get_a_pic_relaxation_time_from_their_cells() {
+    fn granular_scenes_take_the_pic_share_they_give_or_the_default() {
         let flume = load_scene_str(embedded_scene("flume").unwrap(), "flume").unwrap();
-        let r = flume.resolved();
-        let l = super::min_cell(&r.grid);
-        let tau = crate::GRANULAR_PIC_RELAXATION * (l / r.config.gravity.length()).sqrt();
-        assert_eq!((r.config.pic_fraction, r.config.pic_relaxation), (0.0, tau));
-        // on the flume's cells and Δt ≈ 2e-4 s, about the 0.001 per step it had before
-        assert!((0.15..0.25).contains(&tau), "τ = {tau}");
-        let per_step = flume.modified(|f| f.solver.pic_fraction = Some(0.002)).unwrap();
-        let c = &per_step.resolved().config;
-        assert_eq!((c.pic_fraction, c.pic_relaxation), (0.002, 0.0));
+        let c = &flume.resolved().config;
+        assert_eq!((c.pic_fraction, c.pic_relaxation), (crate::GRANULAR_PIC_FRACTION, 0.0));
+        let timed = flume.modified(|f| f.solver.pic_relaxation = Some(0.2)).unwrap();
+        let c = &timed.resolved().config;
+        assert_eq!((c.pic_fraction, c.pic_relaxation), (0.0, 0.2));
         let apic =
             flume.modified(|f| f.solver.transfer = Some(mpm_solver::Transfer::Apic)).unwrap();
         let c = &apic.resolved().config;

@@ -930,8 +930,7 @@ fn config(
         mpm_solver::Transfer::Apic => Transfer::Apic,
     };
     let flip = transfer == Transfer::Flip;
-    let (pic_fraction, pic_relaxation) =
-        solver::pic_share(s, flip, materials, grid.min_cell_size(), gravity.length());
+    let (pic_fraction, pic_relaxation) = solver::pic_share(ctx, s, flip, materials)?;
     let config = SolverConfig {
         scheme: match settings.scheme {
             mpm_solver::Scheme::Usl => Scheme::Usl,

@@ -90,6 +90,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         // same operations: the same bits)
         let sc = &mut self.scratch;
         end_velocities(&mut sc.end_velocity, &sc.velocity, &sc.acceleration, dt);
+        light_nodes(sc);
         let p = &mut self.particles;
         apic_update(
             &self.shape,
@@ -164,7 +165,8 @@ fn flip_update<S: ShapeFunctions<N>, const N: usize>(
 /// multilinear functions' D_p = Σ S_ip (x_i − x_p)⊗(x_i − x_p) vanishes at a node plane). An
 /// explicit node is stable while Δt² k_i / m_i stays below 4, which for a node of mass ξ m_cell
 /// means ξ ≳ C²/4 (C the step's Courant number). A node lighter than C² m_cell
-/// (`scratch.light_mass`, a factor 4 of margin) enters C_p with the particle's own affine velocity
+/// (`scratch.light_mass`, a factor 4 of margin), and not on a boundary (a ghost mirrors a heavier
+/// image, a plane prescribes what it holds), enters C_p with the particle's own affine velocity
 /// v_p + C_p^n (x_i − x_p) instead of v_i^L: no acceleration of its own, and an affine field is
 /// still reproduced exactly (Σ_i (x_i − x_p) ⊗ G_ip = I). Only particles with a light node in
 /// their stencil pay for the second gather.
@@ -176,8 +178,7 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
     step: u64,
 ) -> Result<(), SolverError> {
     let (idx, factors) = (&sc.node_index, &sc.factors);
-    let (end, mass, light) = (&sc.end_velocity, &sc.mass, sc.light_mass);
-    let first = &sc.first_node;
+    let (end, light, first) = (&sc.end_velocity, &sc.light, &sc.first_node);
     let chunk = chunk_len(position.len());
     let failure = position
         .par_chunks_mut(chunk)
@@ -189,12 +190,12 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
                 let q = c * chunk + j;
                 let (v_new, mut c_new) =
                     shape.interpolate(&factors[q], |k| end[idx[q][k] as usize]);
-                if idx[q].iter().any(|&i| mass[i as usize] < light) {
+                if idx[q].iter().any(|&i| light[i as usize]) {
                     let nodes = stencil_nodes::<N>(first[q]);
                     let (x0, c0) = (*x, *cp);
                     c_new = shape.gradient(&factors[q], |k| {
                         let i = idx[q][k] as usize;
-                        if mass[i] < light {
+                        if light[i] {
                             v_new + c0 * (shape.node_position(nodes[k]) - x0)
                         } else {
                             end[i]
@@ -211,6 +212,18 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
         })
         .find_first(Result::is_err);
     failure.unwrap_or(Ok(()))
+}
+
+/// which active nodes are light for APIC's affine matrix (`apic_update`): lighter than
+/// `light_mass`, and not on a boundary, whose ghosts mirror a heavier image and whose planes
+/// prescribe what they hold (not generic: one copy).
+fn light_nodes<F, const N: usize>(sc: &mut Scratch<F, N>) {
+    let threshold = sc.light_mass;
+    sc.light.clear();
+    sc.light.par_extend(sc.mass.par_iter().map(|&m| m < threshold));
+    for b in &sc.boundary {
+        sc.light[b.node as usize] = false;
+    }
 }
 
 /// v_i^L = v_i + a_i Δt (eq 5) of every node into `end` (not generic: one copy).
