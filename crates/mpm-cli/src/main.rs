@@ -12,7 +12,10 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+mod out;
 mod progress;
+
+use out::{out, outln};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mpm_run::{
@@ -288,12 +291,15 @@ fn element_test(opts: &ElementTestOptions) -> ExitCode {
         Ok(cases) => {
             for c in cases {
                 let first = c.first_yield_syy.map_or("none".into(), |v| format!("{v:.3} Pa"));
-                println!(
+                outln!(
                     "{}: first yield σ_yy {first}; final σ_yy {:.3} Pa, σ_xy {:.3} Pa, ε_vol {:.4e}",
-                    c.label, c.final_syy, c.final_sxy, c.final_eps_vol
+                    c.label,
+                    c.final_syy,
+                    c.final_sxy,
+                    c.final_eps_vol
                 );
             }
-            println!("wrote {}", opts.out_dir.display());
+            outln!("wrote {}", opts.out_dir.display());
             ExitCode::SUCCESS
         }
         Err(e) => run_failure(&e),
@@ -329,34 +335,31 @@ fn check_space(scene: &SpaceScene) -> ExitCode {
     match mpm_run::check_space_scene(scene) {
         Ok(r) => {
             let c = &scene.config;
-            println!("{}: valid (3D)", scene.origin());
-            println!("  particles:        {}", r.particles);
+            outln!("{}: valid (3D)", scene.origin());
+            outln!("  particles:        {}", r.particles);
             let cells: Vec<String> = r.cells.iter().map(ToString::to_string).collect();
-            println!(
+            outln!(
                 "  grid:             {} cells, {} active nodes at t = 0",
                 cells.join(" × "),
                 r.active_nodes
             );
-            println!(
+            outln!(
                 "  scheme:           {}, {} shape functions, {:?} transfer, time step {:?}",
                 c.scheme.name(),
                 scene.shape_function.name(),
                 c.transfer,
                 c.time_step
             );
-            println!("  initial Δt:       {:.4e} s", r.initial_dt);
-            println!(
-                "  steps:            {} or more to t = {} s",
-                r.estimated_steps, scene.end_time
-            );
-            println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
-            println!(
+            outln!("  initial Δt:       {:.4e} s", r.initial_dt);
+            outln!("  steps:            {} or more to t = {} s", r.estimated_steps, scene.end_time);
+            outln!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
+            outln!(
                 "  frames:           {} (about {:.1} MB on disk)",
                 r.frames,
                 r.frame_bytes as f64 / 1e6
             );
             for w in &scene.warnings {
-                println!("  warning: {w}");
+                outln!("  warning: {w}");
             }
             ExitCode::SUCCESS
         }
@@ -374,32 +377,34 @@ fn check(scene: &str) -> ExitCode {
     match mpm_run::check_scene(&scene) {
         Ok(r) => {
             let c = scene.solver_config();
-            println!("{}: valid", scene.origin());
+            outln!("{}: valid", scene.origin());
             for w in &scene.resolved().warnings {
-                println!("  warning: {w}");
+                outln!("  warning: {w}");
             }
-            println!("  particles:        {}", r.particles);
-            println!(
+            outln!("  particles:        {}", r.particles);
+            outln!(
                 "  grid:             {} × {} cells, {} active nodes at t = 0",
-                r.cells[0], r.cells[1], r.active_nodes
+                r.cells[0],
+                r.cells[1],
+                r.active_nodes
             );
-            println!(
+            outln!(
                 "  scheme:           {}, {} shape functions, time step {:?}",
                 c.scheme.name(),
                 scene.shape_function().name(),
                 c.time_step
             );
-            println!("  initial Δt:       {:.4e} s", r.initial_dt);
-            println!(
+            outln!("  initial Δt:       {:.4e} s", r.initial_dt);
+            outln!(
                 "  steps:            {} or more to t = {} s (Δt shrinks as the material speeds up or dilates)",
                 r.estimated_steps,
                 scene.end_time()
             );
             if let Some(n) = r.initial_state_steps {
-                println!("  initial state:    gravity ramp, {n} steps or more before t = 0");
+                outln!("  initial state:    gravity ramp, {n} steps or more before t = 0");
             }
-            println!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
-            println!(
+            outln!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
+            outln!(
                 "  frames:           {} (about {:.1} MB on disk)",
                 r.frames,
                 r.frame_bytes as f64 / 1e6
@@ -417,9 +422,9 @@ fn scenes(write: Option<String>, path: Option<PathBuf>, force: bool) -> ExitCode
             for (name, text) in SCENES {
                 let title = mpm_run::title_of(text).unwrap_or_default();
                 let default = if name == DEFAULT_SCENE { " (default)" } else { "" };
-                println!("{name:<20} {title}{default}");
+                outln!("{name:<20} {title}{default}");
             }
-            println!("(the element tests run with `mpm element-test uniaxial|simple-shear`)");
+            outln!("(the element tests run with `mpm element-test uniaxial|simple-shear`)");
             ExitCode::SUCCESS
         }
         Some(name) => {
@@ -435,7 +440,7 @@ fn scenes(write: Option<String>, path: Option<PathBuf>, force: bool) -> ExitCode
             }
             match std::fs::write(&path, text) {
                 Ok(()) => {
-                    println!("wrote {}", path.display());
+                    outln!("wrote {}", path.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
@@ -480,7 +485,7 @@ fn section(
     let mut csv = mpm_output::csv::SECTION_HEADER.to_string();
     mpm_output::csv::section(&mut csv, &stations);
     let Some(out) = out else {
-        print!("{csv}");
+        out!("{csv}");
         return ExitCode::SUCCESS;
     };
     if out.exists() && !force {
@@ -495,7 +500,7 @@ fn section(
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.z), b.max(p.z)));
     let last = stations.last().map_or(0.0, |p| p.station);
-    println!(
+    outln!(
         "wrote {}: {} stations over {last:.3} m, z from {lo:.3} to {hi:.3} m",
         out.display(),
         stations.len()

@@ -239,3 +239,42 @@ end_time = 0.01
     assert!(err.contains("plane.asc") && err.contains("outside the raster"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A standard output whose reader has gone (`mpm section … | head`) ends the command quietly,
+/// with its own exit code: `println!` panicked there (exit 101). The section's 59 001 stations
+/// (1.5 MB of CSV) overfill the 64 KiB pipe, so the writes must meet the closed end.
+#[test]
+fn a_closed_standard_output_ends_the_command_quietly() {
+    let dir = temp_dir("pipe");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut asc = String::from("ncols 60\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 1\n");
+    for _ in 0..10 {
+        let row: Vec<String> = (0..60).map(|c| format!("{}", 50.0 - 0.5 * c as f64)).collect();
+        asc.push_str(&row.join(" "));
+        asc.push('\n');
+    }
+    std::fs::write(dir.join("plane.asc"), asc).unwrap();
+    let dem = dir.join("plane.asc");
+    let args = [
+        "section",
+        dem.to_str().unwrap(),
+        "--from",
+        "0.5,5",
+        "--to",
+        "59.5,5",
+        "--spacing",
+        "0.001",
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before reading anything
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
