@@ -581,7 +581,11 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
             })?;
             let base = finite(&p("base"), base)?;
             let direction = finite(&p("direction"), b.direction.unwrap_or([0.0, 1.0, 0.0]))?;
-            if direction.length() == 0.0 {
+            // scaled by its largest component first: the length of [0, 1e308, 1e308] overflows
+            // and that of [1e-320, 0, 0] underflows, yet both are directions
+            let largest = direction.abs().max_element();
+            let direction = if largest > 0.0 { direction / largest } else { direction };
+            if largest == 0.0 {
                 return Err(ctx.err(
                     &p("direction"),
                     b.direction.map(triple),
@@ -1202,6 +1206,27 @@ end_time = 0.1
         let slant = 0.4 * std::f64::consts::SQRT_2 * 0.4;
         assert!((volume(2) - 0.032).abs() < 0.05 * slant, "prism {}", volume(2));
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    /// A cylinder's axis may have any non-zero length (R3-14): [0, 1e308, 1e308], whose length
+    /// overflows, and [0, 1e-320, 0], whose length underflows, give the cylinders of [0, 1, 1]
+    /// and [0, 1, 0] particle for particle; a zero vector is refused at `direction`.
+    #[test]
+    fn a_cylinder_axis_of_any_magnitude_gives_the_same_cylinder() {
+        let cylinder = "base = [1.0, 0.0, 0.5]\nradius = 0.2\nheight = 0.3";
+        let seeds = |d: &str| {
+            let raised =
+                format!("base = [1.0, 0.3, 0.5]\nradius = 0.15\nheight = 0.3\ndirection = {d}");
+            let text = scene((cylinder, &raised), "");
+            let s = load_space_str(&text, "test.toml").unwrap();
+            s.seeds.iter().filter(|p| p.body == 1).map(|p| p.position).collect::<Vec<_>>()
+        };
+        let tilted = seeds("[0.0, 1.0, 1.0]");
+        assert!(!tilted.is_empty());
+        assert_eq!(seeds("[0.0, 1e308, 1e308]"), tilted);
+        assert_eq!(seeds("[0.0, 1e-320, 0.0]"), seeds("[0.0, 1.0, 0.0]"));
+        let e = error(&scene((cylinder, &format!("{cylinder}\ndirection = [0.0, 0.0, 0.0]")), ""));
+        assert!(e.contains("bodies[1].direction") && e.contains("no direction"), "{e}");
     }
 
     #[test]
