@@ -149,14 +149,10 @@ fn element_test_triaxial_peaks_of_a_mohr_coulomb_scene() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A plane DEM: `mpm section` cuts it, a scene takes the same section as its terrain, cuts a
-/// rupture surface into it and fills the mass between the two (its top read back from the CSV
-/// that `mpm section` wrote).
-#[test]
-fn a_dem_section_becomes_a_scene_with_a_release_mass_between_two_surfaces() {
-    let dir = temp_dir("dem");
-    std::fs::create_dir_all(&dir).unwrap();
-    // z = 50 − 0.5 x, 60 × 10 cells of 1 m, north-west corner (0, 10): centres at x = 0.5, …
+/// creates `dir` and writes `dir/plane.asc`: z = 50 − 0.5 x, 60 × 10 cells of 1 m, north-west
+/// corner (0, 10), cell centres at x = 0.5, 1.5, …
+fn plane_dem(dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
     let mut asc = String::from("ncols 60\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 1\n");
     for _ in 0..10 {
         let row: Vec<String> =
@@ -165,6 +161,15 @@ fn a_dem_section_becomes_a_scene_with_a_release_mass_between_two_surfaces() {
         asc.push('\n');
     }
     std::fs::write(dir.join("plane.asc"), asc).unwrap();
+}
+
+/// A plane DEM: `mpm section` cuts it, a scene takes the same section as its terrain, cuts a
+/// rupture surface into it and fills the mass between the two (its top read back from the CSV
+/// that `mpm section` wrote).
+#[test]
+fn a_dem_section_becomes_a_scene_with_a_release_mass_between_two_surfaces() {
+    let dir = temp_dir("dem");
+    plane_dem(&dir);
     let csv = dir.join("top.csv");
     let (code, out, err) = mpm(&[
         "section",
@@ -246,14 +251,7 @@ end_time = 0.01
 #[test]
 fn a_closed_standard_output_ends_the_command_quietly() {
     let dir = temp_dir("pipe");
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut asc = String::from("ncols 60\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 1\n");
-    for _ in 0..10 {
-        let row: Vec<String> = (0..60).map(|c| format!("{}", 50.0 - 0.5 * c as f64)).collect();
-        asc.push_str(&row.join(" "));
-        asc.push('\n');
-    }
-    std::fs::write(dir.join("plane.asc"), asc).unwrap();
+    plane_dem(&dir);
     let dem = dir.join("plane.asc");
     let args = [
         "section",
