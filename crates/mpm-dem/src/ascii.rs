@@ -372,6 +372,28 @@ mod tests {
         assert!(e.contains("not square"), "{e}");
     }
 
+    /// R3-11: a hole's fill value that the header does not declare (the float32 maximum, −1e300)
+    /// is refused at its cell with the fix; declared as NODATA_value it is a hole; a height of
+    /// 8 849 m (or its 29 032 ft) is a height.
+    #[test]
+    fn an_undeclared_fill_value_is_refused_at_its_cell() {
+        let head = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n";
+        for fill in ["3.4028234663852886e38", "-1e300"] {
+            let e = err(&format!("{head}1 2 3\n4 5 {fill}\n"));
+            assert!(
+                e.contains("t.asc: cell (row 1, column 2)")
+                    && e.contains("beyond ±100000 m")
+                    && e.contains("NODATA_value"),
+                "{e}"
+            );
+            let text = format!("{head}NODATA_value {fill}\n1 2 3\n4 5 {fill}\n");
+            let r = parse(&text, "t.asc", text.len() as u64, None).unwrap();
+            assert_eq!((r.at(1, 2), r.at(1, 1)), (None, Some(5.0)));
+        }
+        let text = format!("{head}8849 29032 3\n4 5 6\n");
+        assert!(parse(&text, "t.asc", text.len() as u64, None).is_ok());
+    }
+
     #[test]
     fn a_huge_declared_size_is_refused_before_anything_of_that_size_is_allocated() {
         let e = err("ncols 100000\nnrows 100000\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n");

@@ -84,6 +84,25 @@ pub enum DemError {
         /// what is wrong.
         problem: String,
     },
+    /// A height beyond [`MAX_HEIGHT`] in size: no terrain, deposit or rupture is that high or that
+    /// deep; it is the fill value of a hole that the file did not declare as its nodata.
+    ///
+    /// [`MAX_HEIGHT`]: crate::MAX_HEIGHT
+    #[error(
+        "{file}: cell (row {row}, column {col}) holds {z:e} m, beyond ±{max} m of any terrain: the fill value of a hole? Declare it as the raster's nodata (`NODATA_value {z:e}` in an ASCII grid's header, GDAL_NODATA in a GeoTIFF: `gdal_edit.py -a_nodata`) or fill the hole"
+    )]
+    Implausible {
+        /// the raster's path.
+        file: String,
+        /// 0-based row, counted from the north (the file's first row).
+        row: usize,
+        /// 0-based column, counted from the west.
+        col: usize,
+        /// the height it holds (m).
+        z: f64,
+        /// [`crate::MAX_HEIGHT`].
+        max: f64,
+    },
     /// The section needs a cell that holds nodata.
     #[error(
         "{file}: cell (row {row}, column {col}) holds nodata and is needed for the height at ({x}, {y}); fill the hole or move the line"

@@ -37,5 +37,5 @@ mod raster;
 mod read;
 
 pub use error::DemError;
-pub use raster::{Crs, MAX_CELLS, Raster, Station};
+pub use raster::{Crs, MAX_CELLS, MAX_HEIGHT, Raster, Station};
 pub use read::Budget;

@@ -7,6 +7,12 @@ use crate::error::DemError;
 /// corrupt header, far above a slope's DEM (a 10 km × 10 km area at 1 m is 100 M cells).
 pub const MAX_CELLS: u64 = 1 << 28;
 
+/// The largest height a raster may hold, in size (m): 100 km, far beyond any terrain in metres
+/// (or feet), and far below the fill values that mark holes in rasters that do not declare them
+/// (the float32 maximum 3.4e38, ±1e300). Such a value read as a height would stretch the grid
+/// and its time step beyond any use, far from the file that caused it.
+pub const MAX_HEIGHT: f64 = 1.0e5;
+
 /// The most stations a section may have: a guard against a spacing typed in the wrong unit.
 pub const MAX_STATIONS: usize = 10_000_000;
 
@@ -94,6 +100,18 @@ impl Raster {
             return Err(DemError::Line {
                 file: file.into(),
                 problem: format!("corner ({west}, {north}) is not a finite map point"),
+            });
+        }
+        // an undeclared fill value: refused at its cell, not later as a grid or a time step
+        if let Some(k) =
+            z.iter().position(|&v| v.is_finite() && Some(v) != nodata && v.abs() > MAX_HEIGHT)
+        {
+            return Err(DemError::Implausible {
+                file: file.into(),
+                row: k / cols,
+                col: k % cols,
+                z: z[k],
+                max: MAX_HEIGHT,
             });
         }
         Ok(Self {

@@ -150,6 +150,14 @@ def test_set_changes_a_field_and_refuses_a_bad_value_with_the_clis_message():
     with pytest.raises(gm.SceneError) as unknown:
         flume.set("solver.no_such_setting", 1)
     assert "no_such_setting" in str(unknown.value)
+    # what `mpm` refuses to read (a scene above 4 MiB) is refused here too, set or given as text
+    with pytest.raises(gm.SceneError) as long_value:
+        flume.set("title", "x" * (5 << 20))
+    assert "larger than" in str(long_value.value)
+    with pytest.raises(gm.SceneError) as long_text:
+        gm.Scene.from_str(before + "#" * (5 << 20))
+    assert "larger than 4 MiB" in str(long_text.value)
+    assert flume.text == before
 
 
 def test_python_values_become_toml_values():

@@ -169,7 +169,7 @@ fn lattice(
     }
 }
 
-pub use crate::polygon::inside_polygon;
+pub use crate::polygon::{inside_polygon, inside_row, row_crossings};
 
 #[cfg(all(test, not(feature = "dim3")))]
 mod tests {

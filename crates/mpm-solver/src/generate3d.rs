@@ -10,7 +10,7 @@
 use glam::DVec2;
 
 use crate::math::{Real, Vector};
-pub use crate::polygon::inside_polygon;
+pub use crate::polygon::{inside_polygon, inside_row, row_crossings};
 
 /// One generated point: where it is and the volume (m³) it stands for.
 #[derive(Clone, Copy, Debug, PartialEq)]

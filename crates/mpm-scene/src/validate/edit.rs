@@ -93,6 +93,13 @@ fn edited(text: &str, origin: &str, path: &str, value: &str) -> Result<String, S
         admissible: String::new(),
         fix: fix.to_string(),
     };
+    // a value longer than a scene may be is refused before it is parsed
+    if value.len() as u64 > crate::limits::MAX_SCENE_BYTES {
+        return Err(refuse(
+            format!("the value alone is larger than a scene may be ({} bytes)", value.len()),
+            "long outlines belong in fewer points (a polygon of at most 10 000 vertices)",
+        ));
+    }
     let Some(steps) = steps(path) else {
         return Err(refuse(
             "not a field path".into(),

@@ -115,6 +115,26 @@ impl Ctx<'_> {
     }
 }
 
+/// A scene text longer than a scene file may be ([`crate::limits::MAX_SCENE_BYTES`]) is refused
+/// whatever its source (a file, a string, a Python edit): what `mpm` refuses to read is refused
+/// everywhere, before any parsing.
+pub(crate) fn bounded(text: &str, origin: &str) -> Result<(), SceneError> {
+    let limit = crate::limits::MAX_SCENE_BYTES;
+    if text.len() as u64 <= limit {
+        return Ok(());
+    }
+    Err(SceneError {
+        origin: origin.to_string(),
+        line: None,
+        column: None,
+        path: String::new(),
+        value: Some(format!("{} bytes", text.len())),
+        problem: format!("the scene is larger than {} MiB", limit >> 20),
+        admissible: format!("a TOML scene of at most {limit} bytes"),
+        fix: "long outlines belong in fewer points (a polygon of at most 10 000 vertices)".into(),
+    })
+}
+
 /// Parses and validates a scene; `origin` names the text in messages (a path, or
 /// `embedded:NAME`). Files the scene names (DEMs, CSV polylines) are relative to the current
 /// directory; [`load_scene_str_in`] gives them another.
@@ -133,6 +153,7 @@ pub fn load_scene_str_in(
 }
 
 fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene, SceneError> {
+    bounded(text, origin)?;
     let map = SourceMap::new(text);
     let ctx = Ctx { origin, map: &map, dir };
     if crate::space::declared_dimension(text) == 3 {

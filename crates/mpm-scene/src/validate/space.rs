@@ -10,8 +10,8 @@ use mpm_solver3d::generate::{self, Shape};
 // the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
 // build's), converted below
 use mpm_solver3d::{
-    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme, SolverConfig, TimeStep,
-    Transfer, Vector,
+    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme,
+    SolverConfig, TimeStep, Transfer, Vector,
 };
 
 use super::{Ctx, bodies, boundaries, finite_pos, materials, num, plausible, serde_error, solver};
@@ -50,6 +50,7 @@ pub(super) fn load_space(
     origin: &str,
     dir: Option<&std::path::Path>,
 ) -> Result<SpaceScene, SceneError> {
+    super::bounded(text, origin)?;
     let map = SourceMap::new(text);
     let ctx = Ctx { origin, map: &map, dir };
     let file: SpaceFile = toml::from_str(text).map_err(|e| {
@@ -417,21 +418,23 @@ fn terrain_grid(
                     "give the release's depth below the DEM in metres",
                 ));
             }
-            if polygon.len() < 3 || !polygon.iter().flatten().all(|v| v.is_finite()) {
-                return Err(ctx.err(
-                    "grid.release_polygon",
-                    Some(format!("{} point(s)", polygon.len())),
-                    "a release polygon has at least 3 finite corners",
-                    "[[x, y], ...] in map coordinates (m), 3 or more",
-                    "give the release area's corners in order",
-                ));
-            }
-            let vertices: Vec<DVec2> = polygon.iter().map(|p| DVec2::from(*p)).collect();
+            let vertices = simple_polygon(
+                ctx,
+                "grid.release_polygon",
+                polygon,
+                "a release polygon",
+                "give the release area's corners [x, y] in map coordinates (m), in order around \
+                 its outline",
+            )?;
             let mut inside = 0usize;
+            // row by row: the crossings of a row once, then each node in O(log n) (a polygon of
+            // many vertices over a fine plan cost vertices × nodes point tests)
+            let mut crossings = Vec::new();
             for k in 0..=nz {
+                generate::row_crossings(&vertices, node_map(0, k).1, &mut crossings);
                 for i in 0..=nx {
-                    let (x, y) = node_map(i, k);
-                    if generate::inside_polygon(&vertices, DVec2::new(x, y)) {
+                    let (x, _) = node_map(i, k);
+                    if generate::inside_row(&crossings, x) {
                         // `depth` below the DEM, wherever a rupture raster cut too
                         let at = k * (nx + 1) + i;
                         heights[at] = heights[at].min(surface[at] - depth);
@@ -475,10 +478,10 @@ fn terrain_grid(
 }
 
 /// The release body's particles: in columns on a plan lattice of spacing `s`, from the grid's
-/// ground up to the DEM's `surface`, as many as the depth holds at `s` (at least one), evenly:
+/// ground up to the DEM's `surface`, as many as the depth holds at `sv` (at least one), evenly:
 /// a column's volume s² (surface − ground) exactly, sampled at its plan centre. Columns less
 /// than 0.001 s deep are left out.
-fn release_fill(t: &TerrainGrid, surface: &TerrainGrid, s: f64) -> Vec<(Vector, f64)> {
+fn release_fill(t: &TerrainGrid, surface: &TerrainGrid, s: f64, sv: f64) -> Vec<(Vector, f64)> {
     let [x0, z0] = t.plan_origin();
     let [nx, nz] = t.plan_cells();
     let h = t.spacing()[0];
@@ -492,7 +495,7 @@ fn release_fill(t: &TerrainGrid, surface: &TerrainGrid, s: f64) -> Vec<(Vector, 
             if depth < 1e-3 * s {
                 continue;
             }
-            let n = (depth / s).round().max(1.0);
+            let n = (depth / sv).round().max(1.0);
             let dy = depth / n;
             for k in 0..n as usize {
                 out.push((Vector::new(x, g + (k as f64 + 0.5) * dy, z), s * s * dy));
@@ -617,35 +620,14 @@ fn body_shape(ctx: &Ctx<'_>, base: &str, b: &SpaceBodySpec) -> Result<Shape, Sce
                     "[[0, 0], [1, 0], [0, 1]]",
                 )
             })?;
-            if !(3..=MAX_VERTICES).contains(&vertices.len())
-                || !vertices.iter().flatten().all(|x| x.is_finite())
-            {
-                return Err(ctx.err(
-                    &p("vertices"),
-                    Some(format!("{} vertices", vertices.len())),
-                    "a prism's polygon has 3 or more finite vertices",
-                    format!("3 to {MAX_VERTICES} vertices [u, v] (m)"),
-                    "list the polygon's corners in order",
-                ));
-            }
-            let mut polygon: Vec<DVec2> = vertices.iter().map(|v| DVec2::from_array(*v)).collect();
-            // a closing vertex that repeats the first one is a common way to write an outline
-            if polygon.len() > 3 && polygon.first() == polygon.last() {
-                polygon.pop();
-            }
-            if let Some((a, c)) = bodies::self_intersection(&polygon) {
-                return Err(ctx.err(
-                    &format!("{}[{a}]", p("vertices")),
-                    Some(format!("[{}, {}]", num(vertices[a][0]), num(vertices[a][1]))),
-                    format!(
-                        "the polygon is not simple: its edge from vertex {a} crosses the edge \
-                         from vertex {c} (a bow-tie has no inside)"
-                    ),
-                    "a simple polygon: edges meet only at their shared corners",
-                    "list the corners in order around the outline, or split the prism into two \
-                     bodies",
-                ));
-            }
+            let polygon = simple_polygon(
+                ctx,
+                &p("vertices"),
+                vertices,
+                "a prism's polygon",
+                "list the polygon's corners in order around the outline, or split the prism into \
+                 two bodies",
+            )?;
             let axis = b.axis.ok_or_else(|| {
                 ctx.missing(&p("axis"), "a prism is extruded along an axis", "\"z\"")
             })?;
@@ -793,8 +775,9 @@ fn seeds(
 }
 
 /// A `shape = "release"` body: the release volume between the terrain grid's ground and the
-/// DEM's surface ([`release_fill`]), at `spacing`; refused without a cut terrain, with another
-/// shape's fields, or with more particles than a scene may hold (`already` are taken).
+/// DEM's surface ([`release_fill`]), at `spacing` (vertically at most a layer height); refused
+/// without a cut terrain, with another shape's fields, or with more particles than a scene may
+/// hold (`already` are taken).
 fn release_body(
     ctx: &Ctx<'_>,
     base: &str,
@@ -828,8 +811,11 @@ fn release_body(
             "cut the release into the DEM in `[grid]`, or give the body a shape",
         ));
     };
+    // Vertically at most one cell layer apart (R3-03): at the plan's spacing alone, layers
+    // finer than it were left empty, and the release sank through them as in free fall.
+    let vertical = spacing.min(t.layers().0);
     // about the particles it will make: each cut lattice node stands for (h/s)² columns of
-    // depth/s + 1 particles at most
+    // depth/sv + 1 particles at most
     let [nx, nz] = t.plan_cells();
     let h = t.spacing()[0];
     let mut estimate = 0.0;
@@ -838,14 +824,14 @@ fn release_body(
             let node = mpm_grid3d::NodeId::new(i, 0, k);
             let depth = surface.node_position(node).y - t.node_position(node).y;
             if depth > 0.0 {
-                estimate += (h / spacing).powi(2) * (depth / spacing + 1.0);
+                estimate += (h / spacing).powi(2) * (depth / vertical + 1.0);
             }
         }
     }
     if !(estimate.is_finite() && already as f64 + estimate <= 2.0 * MAX_PARTICLES as f64) {
         return Err(bodies::too_many(ctx, base));
     }
-    let fill: Vec<generate::Seed> = release_fill(t, surface, spacing)
+    let fill: Vec<generate::Seed> = release_fill(t, surface, spacing, vertical)
         .into_iter()
         .map(|(position, volume)| generate::Seed { position, volume })
         .collect();
@@ -1128,9 +1114,51 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
     })
 }
 
+/// A polygon's vertices `[[u, v], ...]` at `path`: 3 to [`MAX_VERTICES`] finite corners, a closing
+/// vertex that repeats the first dropped, refused (at the vertex) unless simple: a bow-tie, a
+/// slip of the corners' order, would have only part of the inside the outline means.
+fn simple_polygon(
+    ctx: &Ctx<'_>,
+    path: &str,
+    vertices: &[[f64; 2]],
+    what: &str,
+    fix: &str,
+) -> Result<Vec<DVec2>, SceneError> {
+    if !(3..=MAX_VERTICES).contains(&vertices.len())
+        || !vertices.iter().flatten().all(|x| x.is_finite())
+    {
+        return Err(ctx.err(
+            path,
+            Some(format!("{} vertices", vertices.len())),
+            format!("{what} has 3 to {MAX_VERTICES} finite vertices"),
+            format!("3 to {MAX_VERTICES} vertices (m)"),
+            fix,
+        ));
+    }
+    let mut polygon: Vec<DVec2> = vertices.iter().map(|v| DVec2::from_array(*v)).collect();
+    // a closing vertex that repeats the first one is a common way to write an outline
+    if polygon.len() > 3 && polygon.first() == polygon.last() {
+        polygon.pop();
+    }
+    if let Some((a, c)) = bodies::self_intersection(&polygon) {
+        return Err(ctx.err(
+            &format!("{path}[{a}]"),
+            Some(format!("[{}, {}]", num(vertices[a][0]), num(vertices[a][1]))),
+            format!(
+                "the polygon is not simple: its edge from vertex {a} crosses the edge from vertex \
+                 {c} (a bow-tie has no inside)"
+            ),
+            "a simple polygon: edges meet only at their shared corners",
+            fix,
+        ));
+    }
+    Ok(polygon)
+}
+
 #[cfg(test)]
 mod tests {
     use super::{load_space_str, load_space_str_in};
+    use crate::limits::MAX_VERTICES;
     use crate::space::SpaceGrid;
 
     /// A 3D scene with a box, a cylinder and a prism over a rough floor; `extra` is appended
@@ -1526,6 +1554,91 @@ end_time = 0.1
         );
         let e = load_space_str_in(&boxed, "t.toml", &dir).unwrap_err().to_string();
         assert!(e.contains("bodies[1]") && e.contains("release volume"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// R3-03: a release under cell layers finer than the particle spacing (layers of 0.02 m,
+    /// particles 0.05 m apart in plan) gets a particle in every layer it spans: 15 per column
+    /// of its 0.3 m depth, where the plan's spacing alone gave 6 and left most layers empty.
+    /// The volume is the cut's, as before.
+    #[test]
+    fn a_release_fills_every_cell_layer_it_spans() {
+        let dir = std::env::temp_dir().join(format!("mpm-release-layers-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = terrain_scene(&dir, "", 9.0)
+            .replace(
+                "shape = \"box\"\nmin = [100.5, 9, -201.5]\nmax = [101.0, 10.5, -200.5]",
+                "shape = \"release\"",
+            )
+            .replace(
+                "layer_height = 0.1\nlayers = 12\n",
+                "layer_height = 0.02\nlayers = 60\nrelease_polygon = [[100.5, 200.5], \
+                 [101.5, 200.5], [101.5, 201.3], [100.5, 201.3]]\nrelease_depth = 0.3\n",
+            );
+        let s = load_space_str_in(&text, "t.toml", &dir).unwrap();
+        let volume: f64 = s.seeds.iter().map(|q| q.volume).sum();
+        assert!((volume - 0.3 * 80.0 * 0.01).abs() < 1e-9, "{volume}");
+        // particles per column (the columns under the polygon's inside are 0.3 m deep)
+        let mut columns = std::collections::BTreeMap::new();
+        for q in &s.seeds {
+            *columns.entry((q.position.x.to_bits(), q.position.z.to_bits())).or_insert(0) += 1;
+        }
+        assert_eq!(columns.values().max(), Some(&15), "{columns:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// R3-06, R3-10: a release polygon is checked as a prism's is. Its corners in a crossing
+    /// order (a bow-tie, half the release) are refused at the first crossing edge's vertex; a
+    /// closing vertex that repeats the first is the same polygon; more than `MAX_VERTICES`
+    /// corners are refused; a round outline of 4 000 corners over the plan cuts the nodes
+    /// inside its circle (row by row, the same test as point by point).
+    #[test]
+    fn a_release_polygon_is_simple_bounded_and_cut_row_by_row() {
+        let dir = std::env::temp_dir().join(format!("mpm-release-poly-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let release = terrain_scene(&dir, "", 9.0).replace(
+            "shape = \"box\"\nmin = [100.5, 9, -201.5]\nmax = [101.0, 10.5, -200.5]",
+            "shape = \"release\"",
+        );
+        let with = |polygon: &str| {
+            release.replace(
+                "layers = 12\n",
+                &format!("layers = 12\nrelease_polygon = {polygon}\nrelease_depth = 0.3\n"),
+            )
+        };
+        let volume = |text: &str| -> f64 {
+            let s = load_space_str_in(text, "t.toml", &dir).unwrap();
+            s.seeds.iter().map(|q| q.volume).sum()
+        };
+        let square = "[[100.5, 200.5], [101.5, 200.5], [101.5, 201.3], [100.5, 201.3]";
+        let v = volume(&with(&format!("{square}]")));
+        assert!((v - 0.3 * 80.0 * 0.01).abs() < 1e-9, "{v}");
+        assert_eq!(volume(&with(&format!("{square}, [100.5, 200.5]]"))), v);
+        let bowtie = "[[100.5, 200.5], [101.5, 201.3], [101.5, 200.5], [100.5, 201.3]]";
+        let e = load_space_str_in(&with(bowtie), "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("`grid.release_polygon[0]`") && e.contains("not simple"), "{e}");
+        let corners = |n: usize| {
+            let c: Vec<String> = (0..n)
+                .map(|i| {
+                    let t = std::f64::consts::TAU * i as f64 / n as f64;
+                    format!("[{}, {}]", 101.5 + 0.52 * t.cos(), 201.0 + 0.52 * t.sin())
+                })
+                .collect();
+            format!("[{}]", c.join(", "))
+        };
+        let e = load_space_str_in(&with(&corners(MAX_VERTICES + 1)), "t.toml", &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`grid.release_polygon`") && e.contains("10000"), "{e}");
+        // lattice nodes (100.05 + 0.1 i, 200.05 + 0.1 k) within 0.52 m of (101.5, 201.0): the
+        // polygon's corners lie on that circle, its edges within 0.52 (1 − cos(π/4000)) < 1e-7 m
+        // of it, and no node lies that close to it
+        let nodes = (0..30)
+            .flat_map(|i| (0..20).map(move |k| (0.1 * i as f64 - 1.45, 0.1 * k as f64 - 0.95)))
+            .filter(|(x, y)| x * x + y * y < 0.52 * 0.52)
+            .count();
+        let v = volume(&with(&corners(4000)));
+        assert!((v - 0.3 * nodes as f64 * 0.01).abs() < 1e-9, "{v} vs {nodes} nodes");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
