@@ -109,6 +109,8 @@ pub enum Pic {
     PerStep(f64),
     /// a relaxation time of this many √(Δx/g) (`pic_relaxation`).
     Relaxation(f64),
+    /// the default share, 0.001 per step, weighted by noise (`pic_weighting = "noise"`).
+    Noise,
 }
 
 impl Pic {
@@ -116,6 +118,7 @@ impl Pic {
         match self {
             Pic::PerStep(b) => format!("{b:e} per step"),
             Pic::Relaxation(k) => format!("τ = {k} √(Δx/g)"),
+            Pic::Noise => "0.001 per step, weighted by noise".into(),
         }
     }
 }
@@ -152,6 +155,7 @@ impl Case {
         let pic = self.pic.map_or(String::new(), |p| match p {
             Pic::PerStep(b) => format!(" β {b:e}"),
             Pic::Relaxation(k) => format!(" τ {k}"),
+            Pic::Noise => " noise-weighted".into(),
         });
         format!(
             "{}D a = {} {} {} {} res {}{pic}",
@@ -170,6 +174,7 @@ impl Case {
             None => String::new(),
             Some(Pic::PerStep(b)) => format!("pic_fraction = {b:e}\n"),
             Some(Pic::Relaxation(k)) => format!("pic_relaxation = {}\n", k * (dx / 9.81).sqrt()),
+            Some(Pic::Noise) => "pic_weighting = \"noise\"\n".into(),
         }
     }
 }
@@ -407,10 +412,10 @@ pub fn cases(quick: bool) -> Vec<Case> {
     for &a in &[1.0, 2.0] {
         out.push(case(3, a, Model::MohrCoulomb, Base::Rough, 10, Some(25.0)));
     }
-    // the FLIP update's PIC share: 1e-4 per step and a relaxation time 2 √(Δx/g) beside the
-    // default 0.001 per step: how much of the runout is the transfer's numerical damping
+    // the FLIP update's PIC share: 1e-4 per step, a relaxation time 2 √(Δx/g) and the default
+    // weighted by noise, beside the default 0.001 per step: how much of the runout is the transfer's numerical damping
     // (Mohr–Coulomb, quarter columns and quasi-2D sections)
-    for pic in [Some(Pic::PerStep(1e-4)), Some(Pic::Relaxation(2.0))] {
+    for pic in [Some(Pic::PerStep(1e-4)), Some(Pic::Relaxation(2.0)), Some(Pic::Noise)] {
         for &a in &[1.0, 2.0] {
             out.push(Case { pic, ..case(3, a, Model::MohrCoulomb, Base::Rough, 8, None) });
             for d in [None, Some(15.0), Some(25.0)] {

@@ -387,6 +387,11 @@ pub struct SolverSpec {
     /// with `pic_fraction`. Default none.
     #[serde(default)]
     pub pic_relaxation: Option<f64>,
+    /// how the PIC share is spread over the particles: `"uniform"` (each the same share) or
+    /// `"noise"` (each in proportion to the part of its velocity the grid does not see;
+    /// `mpm_solver::PicWeighting`). Default `"uniform"`; not with APIC.
+    #[serde(default)]
+    pub pic_weighting: Option<mpm_solver::PicWeighting>,
     /// below this fraction of its material's reference density a particle is a separated grain
     /// and carries no stress (`mpm_solver::SolverConfig::separation_density`): default 0.5 for
     /// Drucker-Prager, 0 (off) for elastic materials, μ(I) (its own opening) and APIC.

@@ -55,6 +55,34 @@ pub enum Transfer {
     Apic,
 }
 
+/// How the FLIP update's PIC share β ([`SolverConfig::pic_fraction`]) is spread over the
+/// particles (beyond the paper, which has no PIC share).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PicWeighting {
+    /// every particle takes the share β.
+    #[default]
+    Uniform,
+    /// particle p takes β w_p, w_p = |n|² / (|n|² + |v^PIC|²), where v^PIC = Σ_i S_ip v_i^L is the
+    /// velocity the grid sees at the particle and n = v^FLIP − v^PIC the part it does not see:
+    /// the full share where a particle's velocity is all noise (a deposit whose grid velocity is
+    /// nil, where the share is what brings it to rest), little where the particle moves with
+    /// the grid's field (a flowing mass, where a uniform share acts as a viscosity of the order
+    /// of β Δx²/Δt and shortens the runout: measured in `docs/runout.md`). A grain alone on its
+    /// nodes is all seen, though, so the grains a flow throws keep their speed: not the default.
+    Noise,
+}
+
+impl PicWeighting {
+    /// the scene file's keyword.
+    pub fn name(self) -> &'static str {
+        match self {
+            PicWeighting::Uniform => "uniform",
+            PicWeighting::Noise => "noise",
+        }
+    }
+}
+
 /// The mass matrix of the grid solve (beyond the paper, which lumps it).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -260,6 +288,11 @@ pub struct SolverConfig {
     /// 0.1 with β = 0.001 per step (`docs/runout.md`).
     #[serde(default)]
     pub pic_relaxation: Real,
+    /// How the PIC share is spread over the particles: the same share for every particle
+    /// (default), or weighted by the share of each particle's velocity that the grid does not see
+    /// ([`PicWeighting::Noise`]).
+    #[serde(default)]
+    pub pic_weighting: PicWeighting,
     /// A particle whose density has fallen below this fraction of its material's reference
     /// density (the lightest initial density of the material) counts as a separated grain: it
     /// carries no stress, and a compression first closes its gaps (its volume shrinks without
@@ -296,6 +329,7 @@ impl Default for SolverConfig {
             transfer: Transfer::Flip,
             pic_fraction: 0.0,
             pic_relaxation: 0.0,
+            pic_weighting: PicWeighting::Uniform,
             separation_density: 0.0,
             contact: Contact::Surface,
             mass: MassMatrix::Lumped,

@@ -70,7 +70,7 @@ mod stages;
 
 pub use config::{
     Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT, MassMatrix,
-    Periodic, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig, TimeStep, Transfer,
+    Periodic, PicWeighting, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig, TimeStep, Transfer,
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
 pub use error::{Field, SolverError};

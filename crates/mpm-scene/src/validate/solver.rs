@@ -2,7 +2,8 @@
 
 use mpm_contact::Wall;
 use mpm_solver::{
-    Boundaries, Periodic, Scheme, SolverConfig, SolverError, StepLimit, TimeStep, Vector, stable_dt,
+    Boundaries, Periodic, PicWeighting, Scheme, SolverConfig, SolverError, StepLimit, TimeStep,
+    Vector, stable_dt,
 };
 use mpm_solver::{DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT};
 
@@ -200,7 +201,7 @@ pub(super) fn config(
     // stress-free grain keeps its affine stretching for ever, so separated grains would expand
     // without bound (a = 1 column collapse: thrown to 1.5 × the column's height, measured).
     let flip = transfer == mpm_solver::Transfer::Flip;
-    let (pic_fraction, pic_relaxation) = pic_share(ctx, s, flip, materials)?;
+    let (pic_fraction, pic_relaxation, pic_weighting) = pic_share(ctx, s, flip, materials)?;
     let separation_default = if flip { materials.separation_density() } else { 0.0 };
     let config = SolverConfig {
         scheme: settings.scheme,
@@ -216,6 +217,7 @@ pub(super) fn config(
         transfer,
         pic_fraction,
         pic_relaxation,
+        pic_weighting,
         separation_density: s.separation_density.unwrap_or(separation_default),
         contact: s.contact.unwrap_or_default(),
         mass: s.mass.unwrap_or_default(),
@@ -224,15 +226,29 @@ pub(super) fn config(
     Ok(config)
 }
 
-/// The PIC share of a scene's transfer as (per step, relaxation time τ in s), one of them 0:
-/// what the scene gives (one key at most), else under FLIP for granular materials
-/// [`crate::GRANULAR_PIC_FRACTION`] per step, else none.
+/// The PIC share of a scene's transfer as (per step, relaxation time τ in s, weighting), one of
+/// the first two 0: what the scene gives (one key at most), else under FLIP for granular
+/// materials [`crate::GRANULAR_PIC_FRACTION`] per step, else none; uniform unless the scene
+/// weights it by noise (not under APIC, which has no share).
 pub(super) fn pic_share(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
     flip: bool,
     materials: &MaterialsBuilt,
-) -> Result<(f64, f64), SceneError> {
+) -> Result<(f64, f64, PicWeighting), SceneError> {
+    let weighting = match s.pic_weighting {
+        Some(w) if !flip => {
+            return Err(ctx.err(
+                "solver.pic_weighting",
+                Some(format!("\"{}\"", w.name())),
+                "cannot go with `transfer = \"apic\"`",
+                "a weighting of the FLIP update's PIC share; APIC has no such share",
+                "remove `pic_weighting`, or use `transfer = \"flip\"`",
+            ));
+        }
+        Some(w) => w,
+        None => PicWeighting::Uniform,
+    };
     match (s.pic_fraction, s.pic_relaxation) {
         (Some(_), Some(_)) => Err(ctx.err(
             "solver.pic_relaxation",
@@ -241,9 +257,9 @@ pub(super) fn pic_share(
             "the PIC share is given either per step or as a relaxation time, not both",
             "remove one of `pic_fraction` and `pic_relaxation`",
         )),
-        (Some(beta), None) => Ok((beta, 0.0)),
-        (None, Some(tau)) => Ok((0.0, tau)),
-        (None, None) => Ok((if flip { materials.pic_fraction() } else { 0.0 }, 0.0)),
+        (Some(beta), None) => Ok((beta, 0.0, weighting)),
+        (None, Some(tau)) => Ok((0.0, tau, weighting)),
+        (None, None) => Ok((if flip { materials.pic_fraction() } else { 0.0 }, 0.0, weighting)),
     }
 }
 
@@ -366,20 +382,33 @@ mod tests {
     use crate::scenes::embedded_scene;
     use crate::validate::load_scene_str;
 
-    /// A granular scene's PIC share is 0.001 per step unless the scene gives a share per step
-    /// or a relaxation time of its own (both at once are refused: `malformed/`); under APIC
-    /// there is none.
+    /// A granular scene's PIC share is 0.001 per step, the same for every particle, unless the
+    /// scene gives a share per step, a relaxation time (both at once are refused: `malformed/`)
+    /// or a weighting of its own; under APIC there is none, and a weighting is refused; an
+    /// elastic scene has none.
     #[test]
     fn granular_scenes_take_the_pic_share_they_give_or_the_default() {
+        use mpm_solver::PicWeighting::{Noise, Uniform};
         let flume = load_scene_str(embedded_scene("flume").unwrap(), "flume").unwrap();
         let c = &flume.resolved().config;
-        assert_eq!((c.pic_fraction, c.pic_relaxation), (crate::GRANULAR_PIC_FRACTION, 0.0));
+        assert_eq!(
+            (c.pic_fraction, c.pic_relaxation, c.pic_weighting),
+            (crate::GRANULAR_PIC_FRACTION, 0.0, Uniform)
+        );
         let timed = flume.modified(|f| f.solver.pic_relaxation = Some(0.2)).unwrap();
         let c = &timed.resolved().config;
-        assert_eq!((c.pic_fraction, c.pic_relaxation), (0.0, 0.2));
+        assert_eq!((c.pic_fraction, c.pic_relaxation, c.pic_weighting), (0.0, 0.2, Uniform));
+        let noise = flume.modified(|f| f.solver.pic_weighting = Some(Noise)).unwrap();
+        let c = &noise.resolved().config;
+        assert_eq!((c.pic_fraction, c.pic_weighting), (crate::GRANULAR_PIC_FRACTION, Noise));
         let apic =
             flume.modified(|f| f.solver.transfer = Some(mpm_solver::Transfer::Apic)).unwrap();
         let c = &apic.resolved().config;
-        assert_eq!((c.pic_fraction, c.pic_relaxation), (0.0, 0.0));
+        assert_eq!((c.pic_fraction, c.pic_relaxation, c.pic_weighting), (0.0, 0.0, Uniform));
+        let e = apic.modified(|f| f.solver.pic_weighting = Some(Noise)).unwrap_err().to_string();
+        assert!(e.contains("`solver.pic_weighting`") && e.contains("apic"), "{e}");
+        let elastic = load_scene_str(embedded_scene("free_fall").unwrap(), "free_fall").unwrap();
+        let c = &elastic.resolved().config;
+        assert_eq!((c.pic_fraction, c.pic_weighting), (0.0, Uniform));
     }
 }

@@ -10,7 +10,7 @@ use mpm_solver3d::generate::{self, Shape};
 // the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
 // build's), converted below
 use mpm_solver3d::{
-    Boundaries, Contact, MassMatrix, Periodic, STANDARD_GRAVITY, Scheme,
+    Boundaries, Contact, MassMatrix, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme,
     SolverConfig, TimeStep, Transfer, Vector,
 };
 
@@ -920,7 +920,7 @@ fn config(
         mpm_solver::Transfer::Apic => Transfer::Apic,
     };
     let flip = transfer == Transfer::Flip;
-    let (pic_fraction, pic_relaxation) = solver::pic_share(ctx, s, flip, materials)?;
+    let (pic_fraction, pic_relaxation, pic_weighting) = solver::pic_share(ctx, s, flip, materials)?;
     let config = SolverConfig {
         scheme: match settings.scheme {
             mpm_solver::Scheme::Usl => Scheme::Usl,
@@ -942,6 +942,10 @@ fn config(
         transfer,
         pic_fraction,
         pic_relaxation,
+        pic_weighting: match pic_weighting {
+            mpm_solver::PicWeighting::Uniform => PicWeighting::Uniform,
+            mpm_solver::PicWeighting::Noise => PicWeighting::Noise,
+        },
         separation_density: s.separation_density.unwrap_or(if flip {
             materials.separation_density()
         } else {

@@ -24,7 +24,7 @@ use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
 
-use crate::config::Transfer;
+use crate::config::{PicWeighting, Transfer};
 use crate::error::{Field, SolverError};
 use crate::math::{Matrix, Real, Vector};
 use crate::par::chunk_len;
@@ -47,6 +47,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             dt,
             self.config.pic_share(dt),
             self.step + 1,
+            self.config.pic_weighting == PicWeighting::Noise,
         );
         let mut removed = 0.0;
         for t in tallies {
@@ -113,6 +114,7 @@ fn flip_update<S: ShapeFunctions<N>, const N: usize>(
     dt: Real,
     beta: Real,
     step: u64,
+    noise_weighted: bool,
 ) -> Vec<Result<Real, SolverError>> {
     let (idx, factors) = (&sc.node_index, &sc.factors);
     let (a, v) = (&sc.acceleration, &sc.velocity);
@@ -138,8 +140,15 @@ fn flip_update<S: ShapeFunctions<N>, const N: usize>(
                 }
                 let flip = *vp + dt * dv;
                 let v_new = if beta > 0.0 {
-                    // Σ_i S_ip v_i^L = dx is the PIC velocity.
-                    let blended = flip + beta * (dx - flip);
+                    // Σ_i S_ip v_i^L = dx is the PIC velocity; flip − dx what the grid cannot see
+                    let b = if noise_weighted {
+                        let noise = (flip - dx).length_squared();
+                        let seen = noise + dx.length_squared();
+                        if seen > 0.0 { beta * (noise / seen) } else { beta }
+                    } else {
+                        beta
+                    };
+                    let blended = flip + b * (dx - flip);
                     removed += 0.5 * mass[p] * (flip.length_squared() - blended.length_squared());
                     blended
                 } else {
@@ -329,6 +338,73 @@ mod tests {
         assert!((ke - expected).abs() <= 1e-13 * ke0, "kinetic {ke} against {expected}");
         assert!((transfer - (ke0 - ke)).abs() <= 1e-13 * ke0, "booked {transfer}");
         assert!(residual.abs() <= 1e-13 * ke0, "residual {residual}");
+    }
+
+    /// Weighted by noise, the share is the full β where the grid sees nothing of a particle's
+    /// velocity: on the null mode (node momenta exactly zero, w = 1) it damps bit for bit as the
+    /// uniform share does.
+    #[test]
+    fn a_noise_weighted_share_takes_the_full_share_of_a_motion_the_grid_cannot_see() {
+        let config = |pic_weighting| SolverConfig {
+            gravity: Vector::ZERO,
+            pic_fraction: 0.01,
+            pic_weighting,
+            ..Default::default()
+        };
+        let uniform = null_mode_with(config(crate::PicWeighting::Uniform), 50);
+        let noise = null_mode_with(config(crate::PicWeighting::Noise), 50);
+        assert_eq!(noise, uniform);
+        assert!(uniform.1 < 0.5 * uniform.0, "the test must damp: {uniform:?}");
+    }
+
+    /// A free elastic bar (4 m × 0.5 m, 16 cells along it, 4 particles per cell) vibrating in
+    /// its first axial mode, v_x = V cos(π ξ / L) (V = 1 cm/s, strains of 1e-5): a motion the
+    /// grid sees, but for the small part bilinear nodes smooth out. A uniform share of 0.01 per
+    /// step takes a share of that part at every particle and every step; a share weighted by
+    /// noise, w ~ (what the grid misses / what it sees)², almost nothing. Over 400 steps at
+    /// Courant 0.5 (about six periods) the uniform share takes 2.8 % of the mode's energy, the
+    /// weighted one 1.6e-6 of it: the bound, a hundredth of the uniform share's, leaves a margin
+    /// of 200. Both ledgers close to the explicit steps' own error (0.25 %, the same for both).
+    #[test]
+    fn a_noise_weighted_share_spares_a_motion_the_grid_sees() {
+        let run = |pic_weighting| {
+            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap();
+            let mut particles = Particles::default();
+            let (x0, len) = (1.0, 4.0);
+            for i in 0..32 {
+                for j in 0..4 {
+                    let x = Vector::new(x0 + 0.0625, 0.5 + 0.0625)
+                        + 0.125 * Vector::new(i as f64, j as f64);
+                    let v =
+                        Vector::new(0.01 * (std::f64::consts::PI * (x.x - x0) / len).cos(), 0.0);
+                    particles.push(NewParticle::unstressed(x, v, 0.125 * 0.125, 1000.0, ()));
+                }
+            }
+            let material = LinearElastic::from_young_poisson(1e6, 0.0).unwrap();
+            let config = SolverConfig {
+                gravity: Vector::ZERO,
+                pic_fraction: 0.01,
+                pic_weighting,
+                time_step: crate::TimeStep::Courant(0.5),
+                ..Default::default()
+            };
+            let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+            let e0 = s.energy();
+            for _ in 0..400 {
+                s.step().unwrap();
+            }
+            let e = s.energy();
+            (e.transfer_dissipation / e0.kinetic, e.residual / e0.kinetic)
+        };
+        let (lost_uniform, res_uniform) = run(crate::PicWeighting::Uniform);
+        let (lost_noise, res_noise) = run(crate::PicWeighting::Noise);
+        eprintln!(
+            "share of the mode's energy taken: uniform {lost_uniform:.3e}, noise {lost_noise:.3e}; \
+             residuals {res_uniform:.1e}, {res_noise:.1e}"
+        );
+        assert!(lost_uniform > 0.01, "the uniform share must damp the mode: {lost_uniform}");
+        assert!(lost_noise >= 0.0 && lost_noise < 0.01 * lost_uniform, "{lost_noise}");
+        assert!(res_uniform.abs() < 0.01 && res_noise.abs() < 0.01);
     }
 
     /// The PIC share is a setting with a range: outside [0, 1], and with APIC, it is refused.
