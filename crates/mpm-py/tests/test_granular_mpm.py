@@ -90,6 +90,7 @@ def test_a_checkpoint_resumes_to_the_same_bits(tmp_path):
 
 
 BLOCK_3D = """
+silence = ["no_floor"]  # a free fall, meant
 [grid]
 dimension = 3
 kind = "regular"

@@ -1101,6 +1101,37 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
                 crate::limits::available_memory(),
             )
             .map_err(|e| super::polyline::dem_error(ctx, "output.observed.deposit", e))?;
+            // R3-09: a comparison with nothing on the plan (all zero, holes, or another place:
+            // a wrong CRS or offset) would be left out of the summary without a word
+            let ([x0, z0], [x1, z1]) = (grid.plan_origin(), grid.plan_end());
+            let ([cols, rows], c, [west, _, _, north]) =
+                (raster.size(), raster.cell(), raster.extent());
+            let on_plan = (0..rows).any(|r| {
+                let z = -(north - (r as f64 + 0.5) * c); // map y = −z
+                (z0..=z1).contains(&z)
+                    && (0..cols).any(|k| {
+                        (x0..=x1).contains(&(west + (k as f64 + 0.5) * c))
+                            && raster.at(r, k).is_some_and(|d| d > 0.0)
+                    })
+            });
+            if !on_plan {
+                return Err(ctx.err(
+                    "output.observed.deposit",
+                    Some(format!("\"{}\"", spec.deposit)),
+                    format!(
+                        "no cell of the raster over the plan (x {} to {}, map y {} to {}) holds a \
+                         positive depth",
+                        num(x0),
+                        num(x1),
+                        num(-z1),
+                        num(-z0)
+                    ),
+                    "a raster of the deposit's vertical depths (m), positive where it lies, in \
+                     the DEM's map coordinates",
+                    "check the raster's coordinates against the plan, and that it holds depths \
+                     (a DEM difference), not elevations",
+                ));
+            }
             Some((spec.deposit.clone(), raster))
         }
     };
@@ -1558,6 +1589,33 @@ end_time = 0.1
         );
         let e = load_space_str_in(&boxed, "t.toml", &dir).unwrap_err().to_string();
         assert!(e.contains("bodies[1]") && e.contains("release volume"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// R3-09: an observed deposit raster with no positive depth over the plan (all zero, or a
+    /// good one offset off the plan by a wrong CRS) is refused at its field; the same raster
+    /// over the plan is taken.
+    #[test]
+    fn an_observed_deposit_off_the_plan_or_empty_is_refused() {
+        let dir = std::env::temp_dir().join(format!("mpm-observed3d-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = terrain_scene(&dir, "", 9.0)
+            + "\n[output]\nhazard_maps = true\nobserved = { deposit = \"obs.asc\" }\n";
+        let raster = |xll: f64, depth: f64| {
+            let mut r =
+                format!("ncols 30\nnrows 20\nxllcorner {xll}\nyllcorner 200\ncellsize 0.1\n");
+            for _ in 0..20 {
+                r += &(vec![format!("{depth}"); 30].join(" ") + "\n");
+            }
+            std::fs::write(dir.join("obs.asc"), r).unwrap();
+        };
+        raster(100.0, 0.2);
+        assert!(load_space_str_in(&text, "t.toml", &dir).is_ok());
+        for (xll, depth) in [(100.0, 0.0), (5000.0, 0.2)] {
+            raster(xll, depth);
+            let e = load_space_str_in(&text, "t.toml", &dir).unwrap_err().to_string();
+            assert!(e.contains("`output.observed.deposit`") && e.contains("positive depth"), "{e}");
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 
