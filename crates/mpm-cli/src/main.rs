@@ -540,8 +540,12 @@ struct Signals {
     terminated: Arc<AtomicBool>,
 }
 
-/// installs the handlers: the first SIGINT or SIGTERM sets the flags, a second one exits at
-/// once (130 or 143) without waiting for the step.
+/// installs the handlers: the first SIGINT or SIGTERM sets the flags (the run stops after the
+/// step and writes a checkpoint); a second SIGINT (Ctrl-C pressed again) exits at once with 130,
+/// without waiting for the step or the checkpoint. A repeated SIGTERM is ignored: schedulers and
+/// GNU `timeout` signal a job's process and its group, so one stop arrives twice, and exiting at
+/// the second copy gave 143 (the code that promises a checkpoint) with the checkpoint cut short
+/// (R3-01). A job that must die at once gets SIGKILL.
 fn signals() -> Signals {
     use signal_hook::consts::{SIGINT, SIGTERM};
     use signal_hook::flag::{register, register_conditional_shutdown};
@@ -549,13 +553,14 @@ fn signals() -> Signals {
         interrupt: Arc::new(AtomicBool::new(false)),
         terminated: Arc::new(AtomicBool::new(false)),
     };
-    for (signal, name, code) in [(SIGINT, "SIGINT", 130), (SIGTERM, "SIGTERM", 143)] {
-        // The shutdown is registered first, so it sees the flag as the previous signal left it.
-        let installed = register_conditional_shutdown(signal, code, s.interrupt.clone())
-            .and_then(|_| register(signal, s.interrupt.clone()));
-        if let Err(e) = installed {
-            eprintln!("mpm: warning: {name} will not checkpoint ({e})");
-        }
+    // The shutdown is registered first, so it sees the flag as the previous signal left it.
+    let installed = register_conditional_shutdown(SIGINT, 130, s.interrupt.clone())
+        .and_then(|_| register(SIGINT, s.interrupt.clone()));
+    if let Err(e) = installed {
+        eprintln!("mpm: warning: SIGINT will not checkpoint ({e})");
+    }
+    if let Err(e) = register(SIGTERM, s.interrupt.clone()) {
+        eprintln!("mpm: warning: SIGTERM will not checkpoint ({e})");
     }
     if let Err(e) = register(SIGTERM, s.terminated.clone()) {
         eprintln!("mpm: warning: SIGTERM will exit with 130 instead of 143 ({e})");

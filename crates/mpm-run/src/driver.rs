@@ -598,7 +598,7 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         let interrupted = self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed));
         if interrupted {
             self.progress
-                .warn("interrupted: writing a checkpoint after this step (a second signal aborts)");
+                .warn("interrupted: writing a checkpoint after this step (a second Ctrl-C aborts)");
         }
         if self.stop.is_some() || interrupted || self.stop_after.is_some_and(|s| t >= s) {
             return ControlFlow::Break(());
