@@ -912,6 +912,37 @@ fn config(
                     "give the plane's point and the direction its material lies in",
                 )
             })?;
+        // R3-16: a plane on a face of a regular grid whose own law differs is two laws on one
+        // plane (the floor's nodes took both, and its friction all but vanished)
+        if let (SpaceGrid::Regular(g), Some(n)) = (grid, normal.try_normalize()) {
+            let (lo, hi) = (g.origin(), g.upper_corner());
+            let faces = [
+                ("boundaries.ground", boundaries.ground, lo, Vector::Y),
+                ("boundaries.left_wall", boundaries.left_wall, lo, Vector::X),
+                ("boundaries.right_wall", boundaries.right_wall, hi, Vector::NEG_X),
+                ("boundaries.back_wall", boundaries.back_wall, lo, Vector::Z),
+                ("boundaries.front_wall", boundaries.front_wall, hi, Vector::NEG_Z),
+            ];
+            let slack = 1e-6 * g.min_cell_size();
+            let point = Vector::from_array(w.point);
+            let on = faces.iter().find(|(_, law, at, e)| {
+                law.is_some_and(|l| l != friction)
+                    && n.dot(*e).abs() > 1.0 - 1e-9
+                    && (point - *at).dot(*e).abs() <= slack
+            });
+            if let Some((face, ..)) = on {
+                return Err(ctx.err(
+                    &path,
+                    Some(format!("point {}, normal {}", triple(w.point), triple(w.normal))),
+                    format!(
+                        "the plane is the grid's face that `{face}` gives another law: two laws \
+                         on one plane"
+                    ),
+                    "a wall off the grid's faces, or on a face with that face's own law",
+                    format!("give the law as `{face}` and remove this wall"),
+                ));
+            }
+        }
         walls.push(wall);
     }
     let s = &f.solver;
@@ -1371,6 +1402,31 @@ end_time = 0.1
             .replace("cone_match = \"outer\"\n", "");
         let s = load_space_str(&text, "test.toml").unwrap();
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    /// R3-16: a wall on a face of the grid whose law differs from the face's own (the rough
+    /// floor and a frictionless plane on it; the left side) is refused at the wall, naming the
+    /// face; the face's own law on it, and a plane off the faces, are taken.
+    #[test]
+    fn a_wall_on_a_face_with_another_law_is_refused() {
+        let wall = |point: &str, normal: &str, law: &str| {
+            scene(
+                ("ground = \"rough\"\n", "ground = \"rough\"\nleft_wall = \"frictionless\"\n"),
+                &format!(
+                    "\n[[boundaries.walls]]\npoint = {point}\nnormal = {normal}\nlaw = \"{law}\"\n"
+                ),
+            )
+        };
+        let e = error(&wall("[0.0, 0.0, 0.0]", "[0.0, 1.0, 0.0]", "frictionless"));
+        assert!(e.contains("`boundaries.walls[0]`") && e.contains("`boundaries.ground`"), "{e}");
+        let e = error(&wall("[0.0, 0.5, 0.5]", "[2.0, 0.0, 0.0]", "rough"));
+        assert!(e.contains("`boundaries.left_wall`"), "{e}");
+        for (point, normal, law) in [
+            ("[0.5, 0.0, 0.5]", "[0.0, 1.0, 0.0]", "rough"),
+            ("[1.95, 0.0, 0.0]", "[-1.0, 0.0, 0.0]", "frictionless"),
+        ] {
+            assert!(load_space_str(&wall(point, normal, law), "t.toml").is_ok(), "{point}");
+        }
     }
 
     #[test]
