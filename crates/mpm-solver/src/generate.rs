@@ -156,10 +156,12 @@ fn lattice(
         return;
     }
     // Relative slack so that a size that is an exact multiple of the spacing, up to rounding,
-    // gives exactly that many points.
+    // gives exactly that many points: 1e-9, and the rounding of the sizes where the coordinates
+    // are large (a box 0.4 m wide at x = 5e6 m measures 7.9999999925 spacings of 0.05 m).
     const SLACK: Real = 1e-9;
-    let na = ((a / spacing) + SLACK).floor().max(0.0) as usize;
-    let nb = ((b / spacing) + SLACK).floor().max(0.0) as usize;
+    let rounding = 4.0 * Real::EPSILON * (origin.abs().max_element() + a + b) / spacing;
+    let na = ((a / spacing) + (SLACK + rounding)).floor().max(0.0) as usize;
+    let nb = ((b / spacing) + (SLACK + rounding)).floor().max(0.0) as usize;
     for j in 0..nb {
         for i in 0..na {
             let s = (i as Real + 0.5) * spacing;

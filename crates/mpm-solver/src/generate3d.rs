@@ -152,9 +152,11 @@ pub fn fill(shape: &Shape, spacing: Real) -> Vec<Seed> {
         return out;
     }
     // Relative slack so that a size that is an exact multiple of the spacing, up to rounding,
-    // gives exactly that many points.
+    // gives exactly that many points: 1e-9, and the rounding of hi − lo where the coordinates
+    // are large (a box 0.4 m wide at x = 5e6 m measured 7.9999999925 spacings of 0.05 m).
     const SLACK: Real = 1e-9;
-    let count = ((hi - lo) / spacing + SLACK).floor().max(Vector::ZERO);
+    let rounding = 4.0 * Real::EPSILON * lo.abs().max(hi.abs()).max_element() / spacing;
+    let count = ((hi - lo) / spacing + (SLACK + rounding)).floor().max(Vector::ZERO);
     let [nx, ny, nz] = count.to_array().map(|c| c as usize);
     let volume = spacing * spacing * spacing;
     let whole = matches!(shape, Shape::Box { .. });

@@ -279,6 +279,10 @@ fn regular_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError>
             ));
         }
     }
+    let far = (0..3)
+        .map(|a| origin[a].abs().max((origin[a] + cells[a] as f64 * dx).abs()))
+        .fold(0.0, f64::max);
+    precise(ctx, "grid.origin", far, dx)?;
     let cells = cells.map(|n| n as usize);
     RegularGrid::new(Vector::from_array(origin), Vector::from_array(cell), cells).map_err(|e| {
         ctx.err(
@@ -289,6 +293,36 @@ fn regular_grid(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<RegularGrid, SceneError>
             "check origin, cell and cells",
         )
     })
+}
+
+/// The finest detail doubles can hold at coordinates of size `far` must be far below a cell of
+/// `cell` (a millionth of it; positions are rounded to that spacing every step): R3-13, a grid at
+/// x = 1e15 m with 5 cm cells (doubles there are 0.125 m apart) filled a cylinder with 768
+/// particles instead of 1 344 and ran on. Map coordinates in metres (UTM: 5e6 m, 1e-9 m apart)
+/// pass with room to spare. A coordinate that is not a number at all is refused too.
+fn precise(ctx: &Ctx<'_>, path: &str, far: f64, cell: f64) -> Result<(), SceneError> {
+    let spacing = far * f64::EPSILON;
+    if far.is_finite() && spacing <= 1e-6 * cell {
+        return Ok(());
+    }
+    Err(ctx.err(
+        path,
+        None,
+        if far.is_finite() {
+            format!(
+                "coordinates reach {} m, where doubles are {} m apart: {} of a {} m cell",
+                num(far),
+                num(spacing),
+                num(spacing / cell),
+                num(cell)
+            )
+        } else {
+            "the grid reaches beyond the largest number (its far corner or top is infinite)".into()
+        },
+        "coordinates whose precision is below a millionth of a cell",
+        "move the model near the origin (subtract a reference point from the map coordinates), \
+         or check the sizes' units",
+    ))
 }
 
 /// The terrain-following grid over the DEM `dem`: plan lattice from `from` (south-west) to
@@ -321,6 +355,12 @@ fn terrain_grid(
             "give the number of cell layers above the ground, e.g. 20",
         ));
     }
+    // the grid's top, layers × layer_height above the ground, must be a number (R3-13: 8
+    // layers of 1e308 m put it at infinity)
+    let depth = layers as f64 * r;
+    precise(ctx, "grid.layer_height", depth, r)?;
+    let far = from.iter().chain(&to).map(|x| x.abs()).fold(0.0, f64::max);
+    precise(ctx, "grid.from", far, h)?;
     let mut cells = [0usize; 2];
     for a in 0..2 {
         let span = to[a] - from[a];
@@ -1402,6 +1442,33 @@ end_time = 0.1
             .replace("cone_match = \"outer\"\n", "");
         let s = load_space_str(&text, "test.toml").unwrap();
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    /// R3-13: a grid at coordinates where doubles are coarser than a millionth of a cell (x = z
+    /// = 1e15 m: 0.125 m apart, against 0.1 m cells) is refused at `grid.origin`, as is a
+    /// terrain whose layers reach infinity (layer_height 1e308); map coordinates of a UTM size
+    /// (5e6 m) are taken.
+    #[test]
+    fn coordinates_beyond_the_precision_of_doubles_are_refused() {
+        let far = scene(("origin = [0.0, 0.0, 0.0]", "origin = [1.0e15, 0.0, 1.0e15]"), "");
+        let e = error(&far);
+        assert!(e.contains("`grid.origin`") && e.contains("doubles are"), "{e}");
+        let utm = scene(("origin = [0.0, 0.0, 0.0]", "origin = [5.0e6, 0.0, -5.0e6]"), "")
+            .replace("min = [0.2, 0.0, 0.2]", "min = [5000000.2, 0.0, -4999999.8]")
+            .replace("max = [0.6, 0.4, 0.6]", "max = [5000000.6, 0.4, -4999999.4]");
+        let dir = std::env::temp_dir().join(format!("mpm-precision-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let terrain = terrain_scene(&dir, "", 9.0)
+            .replace("layer_height = 0.1\n", "layer_height = 1.0e308\n");
+        let e = load_space_str_in(&terrain, "t.toml", &dir).unwrap_err().to_string();
+        assert!(e.contains("`grid.layer_height`") && e.contains("infinite"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+        // the UTM-sized box alone (the other bodies stay near the origin, off this grid): all
+        // of its 8 × 8 × 8 particles (the fill's count allows for the rounding of its size there)
+        let utm = utm.split("\n[[bodies]]").take(2).collect::<Vec<_>>().join("\n[[bodies]]")
+            + "\n[boundaries]\nground = \"rough\"\n\n[solver]\nend_time = 0.1\n";
+        let s = load_space_str(&utm, "t.toml").unwrap();
+        assert_eq!(s.seeds.len(), 8 * 8 * 8);
     }
 
     /// R3-16: a wall on a face of the grid whose law differs from the face's own (the rough
