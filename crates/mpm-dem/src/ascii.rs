@@ -300,7 +300,8 @@ pub(crate) fn parse(
     let (cols, rows) = (cols as usize, rows as usize);
     let west = if x_centre { x - 0.5 * cell } else { x };
     let south = if y_centre { y - 0.5 * cell } else { y };
-    Raster::new(file, [cols, rows], cell, [west, south + rows as f64 * cell], z, h.nodata)
+    Raster::new(file, [cols, rows], cell, [west, south + rows as f64 * cell], z, h.nodata)?
+        .plausible_heights()
 }
 
 /// Writes `raster` as an ESRI ASCII grid (corner convention; heights in full precision, so a

@@ -180,7 +180,9 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
         .map(|t| t.trim_end_matches('\0').to_string())
         .filter(|t| t.is_ascii() && !t.contains('\0'));
     let crs = crate::Crs { geokeys: carried_keys(keys, doubles, ascii), wkt: None };
-    Ok(Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)?.with_crs(crs))
+    Ok(Raster::new(&file, [w as usize, h as usize], sx, [west, north], z, nodata)?
+        .plausible_heights()?
+        .with_crs(crs))
 }
 
 /// The GeoKeys to carry from a directory `keys` and its parameter tags: every key whose value

@@ -102,18 +102,6 @@ impl Raster {
                 problem: format!("corner ({west}, {north}) is not a finite map point"),
             });
         }
-        // an undeclared fill value: refused at its cell, not later as a grid or a time step
-        if let Some(k) =
-            z.iter().position(|&v| v.is_finite() && Some(v) != nodata && v.abs() > MAX_HEIGHT)
-        {
-            return Err(DemError::Implausible {
-                file: file.into(),
-                row: k / cols,
-                col: k % cols,
-                z: z[k],
-                max: MAX_HEIGHT,
-            });
-        }
         Ok(Self {
             crs: Crs::default(),
             file: file.into(),
@@ -125,6 +113,25 @@ impl Raster {
             z,
             nodata,
         })
+    }
+
+    /// the raster, refused at its first cell whose height is beyond [`MAX_HEIGHT`] in size: an
+    /// undeclared fill value, refused where it is rather than later as a grid or a time step.
+    /// The file readers apply it to heights and depths; a raster made in memory (a map of
+    /// pressures in Pa) holds whatever it is given.
+    pub fn plausible_heights(self) -> Result<Self, DemError> {
+        let z = &self.z;
+        let hole = |v: f64| !v.is_finite() || Some(v) == self.nodata;
+        match z.iter().position(|&v| !hole(v) && v.abs() > MAX_HEIGHT) {
+            None => Ok(self),
+            Some(k) => Err(DemError::Implausible {
+                file: self.file.clone(),
+                row: k / self.cols,
+                col: k % self.cols,
+                z: z[k],
+                max: MAX_HEIGHT,
+            }),
+        }
     }
 
     /// the coordinate reference system it came with (none for a raster made in memory).

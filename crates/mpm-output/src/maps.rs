@@ -162,6 +162,9 @@ mod tests {
         for (k, c) in plan.cells.iter_mut().enumerate() {
             c.max_height = k as f64;
             c.arrival = (k % 2 == 0).then_some(0.1 * k as f64);
+            // a pressure map holds pascals: far beyond the ±1e5 m a height read from a file
+            // may have (mpm_dem::MAX_HEIGHT), and written all the same
+            c.max_pressure = 8.0e5;
         }
         let deposit: Vec<f64> = (0..12).map(|k| 0.01 * k as f64).collect();
         let dir = std::env::temp_dir().join(format!("mpm-maps-{}", std::process::id()));

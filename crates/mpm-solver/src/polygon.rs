@@ -33,7 +33,12 @@ pub fn row_crossings(vertices: &[DVec2], y: f64, out: &mut Vec<f64>) {
     for i in 0..n {
         let (a, b) = (vertices[i], vertices[j]);
         if (a.y > y) != (b.y > y) {
-            out.push(a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y));
+            let x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+            // a NaN crossing (inf/inf, from vertices near the largest doubles) never toggles
+            // the point test; left in, it would break the sorted order
+            if !x.is_nan() {
+                out.push(x);
+            }
         }
         j = i;
     }

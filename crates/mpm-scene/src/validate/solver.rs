@@ -237,7 +237,7 @@ pub(super) fn pic_share(
     materials: &MaterialsBuilt,
 ) -> Result<(f64, f64, PicWeighting), SceneError> {
     let weighting = match s.pic_weighting {
-        Some(w) if !flip => {
+        Some(w @ PicWeighting::Noise) if !flip => {
             return Err(ctx.err(
                 "solver.pic_weighting",
                 Some(format!("\"{}\"", w.name())),

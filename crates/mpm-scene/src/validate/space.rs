@@ -406,7 +406,7 @@ fn terrain_grid(
             "use a larger plan_cell or a smaller plan",
         ));
     }
-    release_bound(ctx, f, h, r)?;
+    release_bound(ctx, f, (h, r), (from, to))?;
     let raster = mpm_dem::Raster::read_within(
         &super::polyline::file_path(ctx, dem),
         crate::limits::available_memory(),
@@ -519,10 +519,15 @@ fn terrain_grid(
 }
 
 /// R3-17: the particles a release polygon must take at least, known before any height is
-/// computed: half its area over the plan spacing squared, times its depth over the vertical
-/// spacing (at least one). A plan_cell in the wrong unit (0.002 for 2 m) was refused only after
+/// computed: a quarter of its area over the plan (the polygon clipped to `from`–`to`) over the
+/// plan spacing squared, times its depth over the vertical spacing (at least one). A plan_cell in the wrong unit (0.002 for 2 m) was refused only after
 /// every lattice height, the cut and the fill had been computed (16 s and 2.3 GB); now at once.
-fn release_bound(ctx: &Ctx<'_>, f: &SpaceFile, h: f64, r: f64) -> Result<(), SceneError> {
+fn release_bound(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    (h, r): (f64, f64),
+    (from, to): ([f64; 2], [f64; 2]),
+) -> Result<(), SceneError> {
     let g = &f.grid;
     let (Some(polygon), Some(depth)) = (&g.release_polygon, g.release_depth) else {
         return Ok(());
@@ -530,27 +535,57 @@ fn release_bound(ctx: &Ctx<'_>, f: &SpaceFile, h: f64, r: f64) -> Result<(), Sce
     let Some(release) = f.bodies.iter().find(|b| b.shape == SpaceShapeKind::Release) else {
         return Ok(());
     };
-    let ppc = release.particles_per_cell.unwrap_or(2).clamp(1, MAX_PARTICLES_PER_CELL);
-    let n = polygon.len();
-    // the shoelace area (a bow-tie's is smaller: still a lower bound; it is refused later)
+    // a polygon the later checks refuse is left to them (they name what is wrong with it)
+    if !(3..=MAX_VERTICES).contains(&polygon.len())
+        || !polygon.iter().flatten().all(|v| v.is_finite())
+        || !finite_pos(depth)
+    {
+        return Ok(());
+    }
+    // only the part over the plan is cut: the polygon clipped to it, then its area (a bow-tie's
+    // is smaller: still a lower bound, and it is refused later)
+    let mut clipped: Vec<[f64; 2]> = polygon.clone();
+    for (axis, bound, keep_above) in
+        [(0, from[0], true), (0, to[0], false), (1, from[1], true), (1, to[1], false)]
+    {
+        let inside = |p: &[f64; 2]| if keep_above { p[axis] >= bound } else { p[axis] <= bound };
+        let mut out = Vec::with_capacity(clipped.len() + 4);
+        for i in 0..clipped.len() {
+            let (a, b) = (clipped[i], clipped[(i + 1) % clipped.len()]);
+            if inside(&a) {
+                out.push(a);
+            }
+            if inside(&a) != inside(&b) {
+                let t = (bound - a[axis]) / (b[axis] - a[axis]);
+                out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+            }
+        }
+        clipped = out;
+        if clipped.len() < 3 {
+            return Ok(());
+        }
+    }
+    let n = clipped.len();
     let area = 0.5
         * (0..n)
             .map(|i| {
-                let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+                let (a, b) = (clipped[i], clipped[(i + 1) % n]);
                 a[0] * b[1] - b[0] * a[1]
             })
             .sum::<f64>()
             .abs();
+    let ppc = release.particles_per_cell.unwrap_or(2).clamp(1, MAX_PARTICLES_PER_CELL);
     let s = h / ppc as f64;
-    let least = 0.5 * area / (s * s) * (depth / s.min(r)).max(1.0);
+    // a quarter of the area's columns: a lower bound with room for the lattice's edges
+    let least = 0.25 * area / (s * s) * (depth / s.min(r)).max(1.0);
     if least > MAX_PARTICLES as f64 {
         return Err(ctx.err(
             "grid.plan_cell",
             Some(num(h)),
             format!(
-                "the release polygon ({} m², {} m deep) would take at least {least:.2e} particles \
-                 at this plan cell, more than the {MAX_PARTICLES} a scene may have",
-                num(area),
+                "the release polygon ({area:.3} m² over the plan, {} m deep) would take at least \
+                 {least:.2e} particles at this plan cell, more than the {MAX_PARTICLES} a scene \
+                 may have",
                 num(depth)
             ),
             "a plan cell (m) that gives the release at most that many particles",
@@ -1216,25 +1251,24 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             )
             .map_err(|e| super::polyline::dem_error(ctx, "output.observed.deposit", e))?;
             // R3-09: a comparison with nothing on the plan (all zero, holes, or another place:
-            // a wrong CRS or offset) would be left out of the summary without a word
+            // a wrong CRS or offset) would be left out of the summary without a word. Sampled
+            // as the comparison samples it: at each plan cell's centre, bilinearly.
             let ([x0, z0], [x1, z1]) = (grid.plan_origin(), grid.plan_end());
-            let ([cols, rows], c, [west, _, _, north]) =
-                (raster.size(), raster.cell(), raster.extent());
-            let on_plan = (0..rows).any(|r| {
-                let z = -(north - (r as f64 + 0.5) * c); // map y = −z
-                (z0..=z1).contains(&z)
-                    && (0..cols).any(|k| {
-                        (x0..=x1).contains(&(west + (k as f64 + 0.5) * c))
-                            && raster.at(r, k).is_some_and(|d| d > 0.0)
-                    })
+            let ([nx, _, nz], h) = (grid.cells(), grid.plan_cell());
+            let on_plan = (0..nz).any(|k| {
+                let z = z0 + (k as f64 + 0.5) * h;
+                (0..nx).any(|i| {
+                    let x = x0 + (i as f64 + 0.5) * h;
+                    raster.height(x, -z).is_ok_and(|d| d > 0.0)
+                })
             });
             if !on_plan {
                 return Err(ctx.err(
                     "output.observed.deposit",
                     Some(format!("\"{}\"", spec.deposit)),
                     format!(
-                        "no cell of the raster over the plan (x {} to {}, map y {} to {}) holds a \
-                         positive depth",
+                        "the raster holds no positive depth at any plan cell's centre (x {} to \
+                         {}, map y {} to {})",
                         num(x0),
                         num(x1),
                         num(-z1),
@@ -1786,25 +1820,35 @@ end_time = 0.1
     }
 
     /// R3-17: a release that must take more particles than a scene may have, whatever the
-    /// heights (here 16 per cell along each axis over the whole 5.5 m² plan, 3 m deep: at least
+    /// heights (here 16 per cell along each axis over the whole 5.5 m² plan, 6 m deep: at least
     /// 3.4e7), is refused at `grid.plan_cell` before any lattice height is computed, not at the
-    /// body after all of them.
+    /// body after all of them; a polygon far wider than the plan counts only its part over the
+    /// plan (a 1 km square around it, 0.3 m deep, 2 per cell: taken).
     #[test]
     fn a_release_too_fine_for_the_particle_limit_is_refused_before_the_heights() {
         let dir = std::env::temp_dir().join(format!("mpm-release-bound-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let text = terrain_scene(&dir, "", 9.0)
-            .replace(
-                "shape = \"box\"\nmin = [100.5, 9, -201.5]\nmax = [101.0, 10.5, -200.5]",
-                "shape = \"release\"\nparticles_per_cell = 16",
-            )
-            .replace(
-                "layers = 12\n",
-                "layers = 12\nrelease_polygon = [[100.05, 200.05], [102.95, 200.05], \
-                 [102.95, 201.95], [100.05, 201.95]]\nrelease_depth = 3.0\n",
-            );
-        let e = load_space_str_in(&text, "t.toml", &dir).unwrap_err().to_string();
-        assert!(e.contains("`grid.plan_cell`") && e.contains("at least 3."), "{e}");
+        let release = |polygon: &str, depth: f64, ppc: u32| {
+            terrain_scene(&dir, "", 9.0)
+                .replace(
+                    "shape = \"box\"\nmin = [100.5, 9, -201.5]\nmax = [101.0, 10.5, -200.5]",
+                    &format!("shape = \"release\"\nparticles_per_cell = {ppc}"),
+                )
+                .replace(
+                    "layers = 12\n",
+                    &format!("layers = 12\nrelease_polygon = {polygon}\nrelease_depth = {depth}\n"),
+                )
+        };
+        let plan = "[[100.05, 200.05], [102.95, 200.05], [102.95, 201.95], [100.05, 201.95]]";
+        let e = load_space_str_in(&release(plan, 6.0, 16), "t.toml", &dir).unwrap_err().to_string();
+        assert!(
+            e.contains("`grid.plan_cell`")
+                && e.contains("5.510 m²")
+                && e.contains("at least 3.39e7"),
+            "{e}"
+        );
+        let wide = "[[-400.0, -300.0], [600.0, -300.0], [600.0, 700.0], [-400.0, 700.0]]";
+        assert!(load_space_str_in(&release(wide, 0.3, 2), "t.toml", &dir).is_ok());
         let _ = std::fs::remove_dir_all(&dir);
     }
 
