@@ -157,6 +157,14 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunErro
 /// The summary of a run whose checkpoint is its last state and which ended (not interrupted):
 /// resuming it would only rewrite its files with a session of no steps.
 fn finished(dir: &Path, c: &checkpoint::CheckpointFile) -> Option<RunSummary> {
+    let s: RunSummary = serde_json::from_str(&summary_text(dir)?).ok()?;
+    let (time, steps, _) = c.state.clock();
+    let last = s.steps == steps && s.simulated_time == time;
+    (last && s.status != mpm_scene::RunStatus::Interrupted).then_some(s)
+}
+
+/// the text of the folder's `summary.json`, if it is a regular file that reads.
+fn summary_text(dir: &Path) -> Option<String> {
     use std::io::Read;
     let mut text = String::new();
     let path = dir.join("summary.json");
@@ -165,10 +173,13 @@ fn finished(dir: &Path, c: &checkpoint::CheckpointFile) -> Option<RunSummary> {
         return None;
     }
     std::fs::File::open(path).and_then(|f| f.take(SUMMARY_LIMIT).read_to_string(&mut text)).ok()?;
-    let s: RunSummary = serde_json::from_str(&text).ok()?;
-    let (time, steps, _) = c.state.clock();
-    let last = s.steps == steps && s.simulated_time == time;
-    (last && s.status != mpm_scene::RunStatus::Interrupted).then_some(s)
+    Some(text)
+}
+
+/// the `scene_hash` of the folder's `summary.json`, if it has one that reads.
+fn summary_scene_hash(dir: &Path) -> Option<String> {
+    let v: serde_json::Value = serde_json::from_str(&summary_text(dir)?).ok()?;
+    v.get("scene_hash")?.as_str().map(str::to_string)
 }
 
 /// The most of `summary.json` [`finished`] reads (its size is a few kilobytes).
@@ -191,6 +202,22 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     }
     let _lock = DirLock::acquire(dir)?;
     let c = checkpoint::read(&path)?;
+    // the folder's own run, as its summary names it (R3-18: with scene.toml deleted, a 2D
+    // checkpoint copied into a 3D run's folder continued there, beside the 3D run's maps)
+    if let Some(theirs) = summary_scene_hash(dir) {
+        let ours = format!("{:016x}", mpm_scene::fnv1a(c.scene_text.as_bytes()));
+        if theirs != ours {
+            return Err(RunError::Output(OutputError::Checkpoint {
+                path,
+                reason: format!(
+                    "its scene ({}, hash {ours}) is not the run this folder's summary.json \
+                     describes (scene hash {theirs}): a checkpoint copied from another run. \
+                     Resume the folder the checkpoint came from, or run the scene again",
+                    c.origin
+                ),
+            }));
+        }
+    }
     // the folder's own scene: a checkpoint copied in from another run would continue that run
     // here and leave a folder of two runs' files
     let written = dir.join("scene.toml");

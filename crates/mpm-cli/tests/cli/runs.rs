@@ -630,7 +630,8 @@ fn a_resume_survives_an_empty_lock_and_deleted_folders() {
 }
 
 /// A checkpoint copied in from another scene's run is refused (exit code 2's error), and the
-/// folder keeps its own files: resuming it would continue the other run here.
+/// folder keeps its own files: resuming it would continue the other run here. Deleting the
+/// folder's scene.toml does not make it the folder's run: its summary.json names the run.
 #[test]
 fn a_checkpoint_from_another_scene_is_refused() {
     let (a, b) = (temp_dir("foreign-a"), temp_dir("foreign-b"));
@@ -643,6 +644,11 @@ fn a_checkpoint_from_another_scene_is_refused() {
     assert!(matches!(e, RunError::Output(OutputError::Checkpoint { .. })), "{e}");
     assert!(e.to_string().contains("copied from another run"), "{e}");
     assert_eq!(std::fs::read(b.join("scene.toml")).unwrap(), scene_b);
+    // R3-18: with scene.toml deleted, the folder's summary.json still names its run
+    std::fs::remove_file(b.join("scene.toml")).unwrap();
+    let e = resume(&b, &RunOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("summary.json describes"), "{e}");
+    assert!(!b.join("scene.toml").exists(), "nothing is written for a refused checkpoint");
     std::fs::remove_dir_all(&a).unwrap();
     std::fs::remove_dir_all(&b).unwrap();
 }
