@@ -53,6 +53,18 @@ pub(super) fn load_space(
     super::bounded(text, origin)?;
     let map = SourceMap::new(text);
     let ctx = Ctx { origin, map: &map, dir };
+    // R3-07: a 3D scene whose dimension was set to anything else (Python's `Scene.set`) would run
+    // as 3D under a text that says otherwise, and its run could not be resumed
+    let declared = crate::space::declared_dimension(text);
+    if declared != 3 {
+        return Err(ctx.err(
+            "grid.dimension",
+            Some(declared.to_string()),
+            "a 3D scene's dimension is 3",
+            "3 here; a 2D scene is a scene of its own (2D scenes are read by `load_scene_str`)",
+            "keep `dimension = 3`, or load the 2D scene as a scene of its own",
+        ));
+    }
     let file: SpaceFile = toml::from_str(text).map_err(|e| {
         if e.message().contains("unknown field `initial_state`") {
             ctx.err(
@@ -1546,6 +1558,15 @@ end_time = 0.1
             + "\n[boundaries]\nground = \"rough\"\n\n[solver]\nend_time = 0.1\n";
         let s = load_space_str(&utm, "t.toml").unwrap();
         assert_eq!(s.seeds.len(), 8 * 8 * 8);
+    }
+
+    /// R3-07: a 3D scene's dimension set to 2 (as Python's `Scene.set` does) is refused at
+    /// `grid.dimension`: the scene would run as 3D under a text that says 2D.
+    #[test]
+    fn a_3d_scene_set_to_another_dimension_is_refused() {
+        let s = load_space_str(&scene(("", ""), ""), "test.toml").unwrap();
+        let e = s.with_value("grid.dimension", "2").unwrap_err().to_string();
+        assert!(e.contains("`grid.dimension`") && e.contains("dimension is 3"), "{e}");
     }
 
     /// R3-16: a wall on a face of the grid whose law differs from the face's own (the rough
