@@ -346,8 +346,8 @@ pub const GROUND_LIFT: f64 = 1e-3;
 
 /// Puts every particle that lies below the ground by at most [`GROUND_LIFT`] smallest cells back
 /// on it (the ground's height at its plan position); true when one was, and no particle is off
-/// the grid for another reason. Only for a grid whose ground is a boundary. Serial, and called only after a failed locate: the cost of the
-/// common step is nil.
+/// the grid for another reason. Called only where the ground is a boundary, and only after a
+/// failed locate (serial: the common step pays nothing).
 #[cold]
 fn lift_onto_ground<S: ShapeFunctions<N>, const N: usize>(
     shape: &S,
