@@ -658,6 +658,12 @@ fn print_summary(s: &RunSummary, out: &Path) {
             );
         }
     }
+    if let Some(o) = &s.outflow {
+        eprintln!("mpm: {}", o.line());
+    }
+    for e in &s.edges {
+        eprintln!("mpm: warning: {}", e.warning());
+    }
     if let Some(e) = &s.error {
         eprintln!("mpm: {e}");
     }

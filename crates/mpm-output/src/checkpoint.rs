@@ -40,8 +40,10 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// wall-load series; 12: the dissipation and the energy rows carry the side walls' friction, the
 /// solver settings the side walls, the scene registry a Mohr–Coulomb run's state; 13: no
 /// layout change, but APIC's light nodes keep the particle's affine velocity, so an older APIC
-/// run resumed would change its numerics mid-run).
-pub const FORMAT: u32 = 13;
+/// run resumed would change its numerics mid-run; 14: the dissipation carries what left through
+/// outflow faces, the energy rows its energy, the solver settings the outflow faces, the history
+/// the watch over the grid's undeclared sides).
+pub const FORMAT: u32 = 14;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";
@@ -226,6 +228,9 @@ pub struct History {
     /// the rows of `walls.csv` so far, when the scene has a boundary.
     #[serde(default)]
     pub walls: Option<crate::loads::WallSeries>,
+    /// the watch over the grid's side faces that the scene did not declare.
+    #[serde(default)]
+    pub edges: Option<mpm_scene::edges::EdgeWatch>,
 }
 
 #[cfg(test)]

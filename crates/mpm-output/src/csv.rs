@@ -73,7 +73,7 @@ pub fn flush<R>(
 /// header line of `energy.csv`.
 pub const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_dissipation,\
      friction_work,constraint_work,transfer_dissipation,external_work,residual,stored,dissipated,\
-     total,side_wall_friction\n";
+     total,side_wall_friction,outflow\n";
 
 /// header line of `probes.csv`.
 pub const PROBES_HEADER: &str =
@@ -89,7 +89,7 @@ pub fn energy(s: &mut String, rows: &[EnergyRow]) {
         let e = &r.ledger;
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.time,
             r.step,
             r.dt,
@@ -105,7 +105,8 @@ pub fn energy(s: &mut String, rows: &[EnergyRow]) {
             e.stored(),
             e.dissipated(),
             e.total(),
-            e.side_wall_friction
+            e.side_wall_friction,
+            e.outflow
         );
     }
 }

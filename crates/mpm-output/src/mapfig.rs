@@ -35,7 +35,14 @@ pub struct MapFigure<'a> {
     pub release: &'a [bool],
     /// the deposit's cells.
     pub deposit: &'a [bool],
+    /// the grid's undeclared sides the material reached (`left_wall` west, `right_wall` east,
+    /// `back_wall` north, `front_wall` south), drawn as a thick magenta edge: the map is cut
+    /// there by the grid, not by the terrain.
+    pub edges: &'a [String],
 }
+
+/// the colour of an undeclared edge the material reached.
+const EDGE: RGBColor = RGBColor(220, 0, 180);
 
 /// the stops of the flow-height colour ramp (pale yellow to dark red).
 const RAMP: [(f64, [u8; 3]); 5] = [
@@ -185,6 +192,18 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
                 }
             }
         }
+        // the undeclared sides the material reached
+        for name in f.edges {
+            let (x0, y0, x1, y1) = (left, top, left + w, top + h);
+            let line = match name.as_str() {
+                "left_wall" => [(x0, y0), (x0, y1)],
+                "right_wall" => [(x1, y0), (x1, y1)],
+                "back_wall" => [(x0, y0), (x1, y0)],
+                "front_wall" => [(x0, y1), (x1, y1)],
+                _ => continue,
+            };
+            root.draw(&PathElement::new(line.to_vec(), EDGE.stroke_width(5))).map_err(e)?;
+        }
         // title
         let text = |size: u32| ("sans-serif", size).into_font().color(&BLACK);
         root.draw(&Text::new(f.title.to_string(), (left, 12), text(18))).map_err(e)?;
@@ -224,7 +243,10 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
             let y = ly + k * lh / 4;
             root.draw(&Text::new(format!("{v:.1}"), (lx + 24, y - 7), text(12))).map_err(e)?;
         }
-        let keys = [("release", RGBColor(20, 60, 200)), ("deposit", BLACK)];
+        let mut keys = vec![("release", RGBColor(20, 60, 200)), ("deposit", BLACK)];
+        if !f.edges.is_empty() {
+            keys.push(("grid edge reached", EDGE));
+        }
         for (k, (name, colour)) in keys.into_iter().enumerate() {
             let y = ly + lh + 20 + 18 * k as i32;
             root.draw(&PathElement::new(vec![(lx, y), (lx + 18, y)], colour.stroke_width(2)))
@@ -233,7 +255,8 @@ pub fn write(path: &Path, f: &MapFigure<'_>) -> Result<(), OutputError> {
         }
         if hi > lo {
             let contour = format!("contours {} m", nice((hi - lo) / 12.0));
-            root.draw(&Text::new(contour, (lx, ly + lh + 56), text(11))).map_err(e)?;
+            let y = ly + lh + 56 + if f.edges.is_empty() { 0 } else { 18 };
+            root.draw(&Text::new(contour, (lx, y), text(11))).map_err(e)?;
         }
         root.present().map_err(|e| e.to_string())
     })();
@@ -285,6 +308,7 @@ mod tests {
             height: &height,
             release: &release,
             deposit: &deposit,
+            edges: &["right_wall".to_string()],
         };
         write(&path, &fig).unwrap();
         let bytes = std::fs::read(&path).unwrap();

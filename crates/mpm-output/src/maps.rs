@@ -95,6 +95,8 @@ pub struct Context<'a> {
     pub ground: &'a [f64],
     /// the cells where the released material started.
     pub release: &'a [bool],
+    /// the grid's undeclared sides the material reached (their `[boundaries]` keys).
+    pub edges: &'a [String],
 }
 
 /// writes `maps/outlines.geojson` (the release, the affected area (a flow height > 0) and the
@@ -141,6 +143,7 @@ pub fn figures(
             height: &height,
             release: context.release,
             deposit: &deposited,
+            edges: context.edges,
         },
     )
 }

@@ -11,10 +11,11 @@ use std::time::Instant;
 
 use mpm_grid::ShapeFunctions;
 use mpm_scene::dispatch::SceneModel;
+use mpm_scene::edges::{EdgeContact, EdgeWatch, Grain};
 use mpm_scene::envelope::{self, Envelope};
 use mpm_scene::observed;
 use mpm_scene::summary::{
-    self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
+    self, DtStats, EnergyReport, OutflowReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
 use mpm_scene::{InitialState, InitialStateSummary, Resolved, Scene, ground_height};
 use mpm_solver::{
@@ -324,6 +325,17 @@ impl Driver<'_> {
         }
         let m = self.metrics(solver);
         self.history.runout.push(m);
+        if let Some(w) = &mut self.history.edges {
+            let f = Flow::of(r, solver.particles());
+            let grains: Vec<Grain> = (f.position.iter().zip(f.mass.iter()))
+                .map(|(x, &mass)| Grain {
+                    position: [x.x, x.y, 0.0],
+                    ground: ground_height(&r.ground, x.x),
+                    mass,
+                })
+                .collect();
+            w.observe(t, &grains, 0.5 * r.spacing);
+        }
         if self.history.walls.is_none() {
             let (b, walls) = (&r.config.boundaries, r.config.walls.len());
             let sides = [b.ground, b.left_wall, b.right_wall].map(|s| s.is_some());
@@ -440,6 +452,12 @@ impl Driver<'_> {
         let r = self.scene.resolved();
         let h = &self.history;
         let steps = solver.step_count();
+        let gone = solver.outflowed().mass;
+        let edges = h.edges.as_ref().map_or_else(Vec::new, |w| {
+            w.reached(Flow::of(r, solver.particles()).mass.iter().sum::<f64>() + gone)
+        });
+        let mut warnings: Vec<String> = r.warnings.iter().map(ToString::to_string).collect();
+        warnings.extend(edges.iter().map(EdgeContact::warning));
         RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
             scene_origin: self.scene.origin().to_string(),
@@ -502,7 +520,7 @@ impl Driver<'_> {
             }),
             state_hash: checkpoint::state_hash(&solver.checkpoint()),
             initial_state: self.initial.clone(),
-            warnings: r.warnings.iter().map(ToString::to_string).collect(),
+            warnings,
             dimension: 2,
             hazard_maps: None,
             walls: h
@@ -510,6 +528,8 @@ impl Driver<'_> {
                 .as_ref()
                 .map(|w| w.summary(&load_samples(solver.boundary_loads())))
                 .unwrap_or_default(),
+            outflow: outflow_report(r, solver),
+            edges,
         }
     }
 
@@ -651,6 +671,7 @@ impl<'a> Driver<'a> {
         }
         let m0 = self.metrics(solver);
         self.history.initial = Some(m0);
+        self.history.edges = edge_watch(r);
         let p = solver.particles();
         self.history.energy_check = Some(EnergyCheck::new(
             &solver.energy(),
@@ -744,6 +765,48 @@ impl<'a> Driver<'a> {
         }
         Ok(summary)
     }
+}
+
+/// the watch over the grid's sides that the scene left undeclared (no wall law, not outflow,
+/// not periodic); `None` when every side is declared.
+fn edge_watch(r: &Resolved) -> Option<EdgeWatch> {
+    let c = &r.config;
+    let (x0, x1) = r.grid.x_range();
+    let open = c.periodic.is_none();
+    let mut faces = Vec::new();
+    if open && c.boundaries.left_wall.is_none() && c.outflow.x_min.is_none() {
+        faces.push(("left_wall", 0, x0, -1.0));
+    }
+    if open && c.boundaries.right_wall.is_none() && c.outflow.x_max.is_none() {
+        faces.push(("right_wall", 0, x1, 1.0));
+    }
+    EdgeWatch::new(faces, r.grid.column_width())
+}
+
+/// `summary.json` `outflow` of a scene with outflow faces.
+fn outflow_report<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    r: &Resolved,
+    solver: &Solver<M, S, N>,
+) -> Option<OutflowReport> {
+    let o = r.config.outflow;
+    let faces: Vec<String> = [("left_wall", o.x_min), ("right_wall", o.x_max)]
+        .into_iter()
+        .filter_map(|(n, c)| c.map(|_| n.to_string()))
+        .collect();
+    if faces.is_empty() {
+        return None;
+    }
+    let gone = solver.outflowed();
+    let total = solver.particles().total_mass() + gone.mass;
+    Some(OutflowReport {
+        faces,
+        particles: gone.particles,
+        mass: gone.mass,
+        mass_fraction: if total > 0.0 { gone.mass / total } else { 0.0 },
+        momentum: vec![gone.momentum.x, gone.momentum.y],
+        energy: gone.energy,
+        first_time: gone.first_time,
+    })
 }
 
 /// The section a DEM scene runs along as a GeoJSON feature collection: the line from `from` to

@@ -25,6 +25,10 @@ use crate::driver::{Driver, initial_state};
 use crate::error::RunError;
 pub use crate::options::RunOptions;
 
+/// what a message about a particle that left the grid adds: how to let it leave, or keep it.
+pub(crate) const OUTSIDE_HINT: &str = " (material may leave through a side of the grid that \
+    `[boundaries]` declares `\"outflow\"`; otherwise widen the grid or give the side a wall)";
+
 /// What `mpm check` reports.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CheckReport {
@@ -318,7 +322,7 @@ pub(crate) fn fits(
     if step > max_steps {
         return Err(format!("step {step} is above max_steps = {max_steps}"));
     }
-    if particles != seeds {
+    if particles != seeds as u64 {
         return Err(format!("{particles} particles, but its scene generates {seeds}"));
     }
     // At most one row and one frame per step, besides those of t = 0.
@@ -423,10 +427,11 @@ impl Job for RunJob<'_> {
         let during_ramp =
             initial_error.is_some() && matches!(r.initial_state, InitialState::GravityRamp { .. });
         let describe = |e: &SolverError| {
+            let hint = if matches!(e, SolverError::OutsideGrid { .. }) { OUTSIDE_HINT } else { "" };
             if during_ramp {
-                format!("initial state (gravity ramp, before the run): {e}")
+                format!("initial state (gravity ramp, before the run): {e}{hint}")
             } else {
-                e.to_string()
+                format!("{e}{hint}")
             }
         };
         let result = match initial_error {

@@ -26,10 +26,11 @@ use mpm_output::dir::prepare_dir;
 use mpm_output::loads::{self, LoadSample, WallSeries};
 use mpm_output::{OutputError, atomic, maps, report, vtk};
 use mpm_scene::dispatch::SceneModel;
+use mpm_scene::edges::{EdgeContact, EdgeWatch, Grain};
 use mpm_scene::plan::PlanEnvelope;
 use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::{
-    self, DtStats, EnergyReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
+    self, DtStats, EnergyReport, OutflowReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
 use mpm_scene::{SavedState, SpaceGrid, SpaceScene, dispatch_space, fnv1a};
 use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport, Vector};
@@ -52,6 +53,7 @@ fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
         transfer_dissipation: l.transfer_dissipation,
         side_wall_friction: l.side_wall_friction,
         external_work: l.external_work,
+        outflow: l.outflow,
         residual: l.residual,
     }
 }
@@ -255,7 +257,7 @@ impl SpaceJob for SpaceRun<'_> {
             return Err(e);
         }
         let (status, error) = match (&result, d.stop) {
-            (Err(e), _) => (RunStatus::Failed, Some(e.to_string())),
+            (Err(e), _) => (RunStatus::Failed, Some(describe(e))),
             (Ok(RunEnd::EndTime), _) => (RunStatus::Completed, None),
             (Ok(RunEnd::Stopped), Some(Stop::StepLimit)) => (
                 RunStatus::StepLimit,
@@ -275,7 +277,7 @@ impl SpaceJob for SpaceRun<'_> {
         };
         let summary = d.finish(&solver, status, error, self.threads)?;
         match result {
-            Err(e) => Err(RunError::Solver { message: e.to_string(), summary: Box::new(summary) }),
+            Err(e) => Err(RunError::Solver { message: describe(&e), summary: Box::new(summary) }),
             Ok(_) => Ok(summary),
         }
     }
@@ -295,6 +297,8 @@ struct SpaceDriver<'a> {
     plan: Option<PlanEnvelope>,
     /// the rows of `walls.csv` so far (a scene with a boundary).
     walls: Option<WallSeries>,
+    /// the watch over the grid's undeclared side faces.
+    edges: Option<EdgeWatch>,
     /// when this session started, and at which step.
     session: (Instant, u64),
     /// wall time (s) and particle-steps of earlier sessions (a resumed run's).
@@ -400,6 +404,7 @@ impl<'a> SpaceDriver<'a> {
             frames: Vec::new(),
             flushed: [0; 3],
             walls: None,
+            edges: edge_watch(scene),
             check,
             alarm_time: None,
             rest_peak: 0.0,
@@ -430,6 +435,7 @@ impl<'a> SpaceDriver<'a> {
             }
             d.alarm_time = h.alarm_time;
             d.walls = h.walls;
+            d.edges = h.edges;
             if d.plan.is_some() {
                 d.plan = h.plan;
             }
@@ -473,6 +479,7 @@ impl<'a> SpaceDriver<'a> {
             envelope: None,
             plan: self.plan.clone(),
             walls: self.walls.clone(),
+            edges: self.edges.clone(),
         }
     }
 
@@ -599,6 +606,17 @@ impl<'a> SpaceDriver<'a> {
         });
         let m = self.metrics(solver);
         self.runout.push(m);
+        if let Some(w) = &mut self.edges {
+            let (scene, p) = (self.scene, solver.particles());
+            let grains: Vec<Grain> = flowing(scene, p)
+                .map(|q| {
+                    let x = p.position[q];
+                    let ground = scene.grid.ground(x.x, x.z).0;
+                    Grain { position: x.to_array(), ground, mass: p.mass[q] }
+                })
+                .collect();
+            w.observe(t, &grains, 0.5 * self.spacing);
+        }
         if self.walls.is_none() {
             let (b, walls) = (&self.scene.config.boundaries, self.scene.config.walls.len());
             let sides = [b.ground, b.left_wall, b.right_wall, b.back_wall, b.front_wall];
@@ -708,6 +726,32 @@ impl<'a> SpaceDriver<'a> {
         let mut check = self.check;
         let wall = self.earlier.0 + self.wall_time;
         let particle_steps = self.earlier.1 + (steps - self.session.1) as f64 * n as f64;
+        let gone = solver.outflowed();
+        let edges = self.edges.as_ref().map_or_else(Vec::new, |w| {
+            w.reached(flowing(scene, p).map(|q| p.mass[q]).sum::<f64>() + gone.mass)
+        });
+        let mut warnings: Vec<String> = scene.warnings.iter().map(ToString::to_string).collect();
+        warnings.extend(edges.iter().map(EdgeContact::warning));
+        let o = scene.config.outflow;
+        let faces: Vec<String> = [
+            ("left_wall", o.x_min),
+            ("right_wall", o.x_max),
+            ("back_wall", o.z_min),
+            ("front_wall", o.z_max),
+        ]
+        .into_iter()
+        .filter_map(|(n, c)| c.map(|_| n.to_string()))
+        .collect();
+        let total = p.mass.iter().sum::<f64>() + gone.mass;
+        let outflow = (!faces.is_empty()).then(|| OutflowReport {
+            faces,
+            particles: gone.particles,
+            mass: gone.mass,
+            mass_fraction: if total > 0.0 { gone.mass / total } else { 0.0 },
+            momentum: gone.momentum.to_array().to_vec(),
+            energy: gone.energy,
+            first_time: gone.first_time,
+        });
         let mut summary = RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
             scene_origin: scene.origin().to_string(),
@@ -744,7 +788,7 @@ impl<'a> SpaceDriver<'a> {
             observed: None,
             state_hash: state_hash(&solver.checkpoint()),
             initial_state: None,
-            warnings: scene.warnings.iter().map(ToString::to_string).collect(),
+            warnings,
             dimension: 3,
             hazard_maps: None,
             walls: self
@@ -752,6 +796,8 @@ impl<'a> SpaceDriver<'a> {
                 .as_ref()
                 .map(|w| w.summary(&load_samples(solver.boundary_loads())))
                 .unwrap_or_default(),
+            outflow,
+            edges,
         };
         let deposit = self.plan.as_ref().map(|e| {
             let flow: Vec<mpm_solver3d::Vector> =
@@ -797,7 +843,13 @@ impl<'a> SpaceDriver<'a> {
                     "{}: largest flow height, t = {t:.1} s",
                     scene.title().unwrap_or("hazard map")
                 );
-                let context = maps::Context { title: &title, ground: &ground, release: &release };
+                let edges: Vec<String> = summary.edges.iter().map(|c| c.face.clone()).collect();
+                let context = maps::Context {
+                    title: &title,
+                    ground: &ground,
+                    release: &release,
+                    edges: &edges,
+                };
                 maps::figures(dir, e, depth, &context)?;
             }
             if scene.output.plots {
@@ -867,6 +919,31 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         }
         ControlFlow::Continue(())
     }
+}
+
+/// a 3D solver error as the run reports it: a particle out of the grid with what to do.
+fn describe(e: &mpm_solver3d::SolverError) -> String {
+    match e {
+        mpm_solver3d::SolverError::OutsideGrid { .. } => format!("{e}{}", crate::run::OUTSIDE_HINT),
+        _ => e.to_string(),
+    }
+}
+
+/// the watch over the grid's side faces that the scene left undeclared (no wall law, not
+/// outflow, not periodic); `None` when every side is declared.
+fn edge_watch(scene: &SpaceScene) -> Option<EdgeWatch> {
+    let (c, g) = (&scene.config, &scene.grid);
+    let ([x0, z0], [x1, z1]) = (g.plan_origin(), g.plan_end());
+    let (b, o) = (&c.boundaries, &c.outflow);
+    let x_open = c.periodic.is_none();
+    let faces = [
+        ("left_wall", x_open && b.left_wall.is_none() && o.x_min.is_none(), 0, x0, -1.0),
+        ("right_wall", x_open && b.right_wall.is_none() && o.x_max.is_none(), 0, x1, 1.0),
+        ("back_wall", b.back_wall.is_none() && o.z_min.is_none(), 2, z0, -1.0),
+        ("front_wall", b.front_wall.is_none() && o.z_max.is_none(), 2, z1, 1.0),
+    ];
+    let open = faces.into_iter().filter(|f| f.1).map(|(n, _, axis, at, out)| (n, axis, at, out));
+    EdgeWatch::new(open.collect(), g.plan_cell())
 }
 
 /// the indices of the particles of flowing materials (not obstacles; as the runout measures).

@@ -34,6 +34,7 @@
 #![allow(clippy::result_large_err)]
 
 pub mod dispatch;
+pub mod edges;
 pub mod envelope;
 mod error;
 pub mod file;

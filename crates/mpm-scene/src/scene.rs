@@ -52,6 +52,14 @@ pub enum GridBuilt {
 }
 
 impl GridBuilt {
+    /// x of the grid's first and last columns of nodes (its left and right sides, m).
+    pub fn x_range(&self) -> (f64, f64) {
+        match self {
+            GridBuilt::Terrain(t) => t.x_range(),
+            GridBuilt::Regular(g) => (g.origin().x, g.upper_corner().x),
+        }
+    }
+
     /// the width of a column: the stations of the runout measures, envelopes and DEM sections.
     pub fn column_width(&self) -> f64 {
         match self {

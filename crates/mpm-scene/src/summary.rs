@@ -193,6 +193,51 @@ pub struct RunSummary {
     /// the loads each grid side and declared wall took (`walls.csv` has them over time).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walls: Vec<WallLoad>,
+    /// what left through the outflow faces, when the scene declares one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outflow: Option<OutflowReport>,
+    /// the grid's side faces that the scene did not declare and that the material reached
+    /// (each also a warning).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edges: Vec<crate::edges::EdgeContact>,
+}
+
+/// What left the run through its outflow faces (`summary.json` `outflow`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OutflowReport {
+    /// the faces declared `"outflow"`.
+    pub faces: Vec<String>,
+    /// particles that left.
+    pub particles: u64,
+    /// their mass (kg; kg/m in plane strain).
+    pub mass: f64,
+    /// that mass as a fraction of the run's material at the start.
+    pub mass_fraction: f64,
+    /// their momentum as they left (N·s; per metre in plane strain).
+    pub momentum: Vec<f64>,
+    /// their kinetic, elastic and potential energy as they left (J; J/m in plane strain),
+    /// `energy.csv`'s `outflow`.
+    pub energy: f64,
+    /// when the first particle left (s).
+    pub first_time: Option<f64>,
+}
+
+impl OutflowReport {
+    /// the run's last line about it.
+    pub fn line(&self) -> String {
+        match self.first_time {
+            None => format!("nothing left through the outflow faces ({})", self.faces.join(", ")),
+            Some(t) => format!(
+                "{} particles ({:.4e} kg, {:.2} % of the mass) left through the outflow faces \
+                 ({}) from t = {t:.3} s, carrying {:.4e} J of energy",
+                self.particles,
+                self.mass,
+                100.0 * self.mass_fraction,
+                self.faces.join(", "),
+                self.energy
+            ),
+        }
+    }
 }
 
 /// the dimension of a summary written before 3D scenes existed.

@@ -216,6 +216,66 @@ pub struct Periodic {
     pub length: Real,
 }
 
+/// Outflow faces: planes of the grid's sides through which material leaves the run. A particle
+/// beyond one at the end of a step is taken out of the run, and the mass, momentum and energy
+/// it carries out are booked ([`crate::Outflowed`], the energy ledger's `outflow`), so that the
+/// residual stays closed; the run goes on. The nodes on an outflow face are free (no boundary
+/// condition). A face is the plane x = `x_min` (material leaves towards −x), x = `x_max`
+/// (+x), and in 3D z = `z_min`, z = `z_max`; `None` is no outflow there. The front end puts
+/// them on the grid's sides; the solver takes any finite planes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Outflow {
+    /// material at x < x_min leaves (m).
+    pub x_min: Option<Real>,
+    /// material at x > x_max leaves (m).
+    pub x_max: Option<Real>,
+    /// material at z < z_min leaves (m; 3D only).
+    #[cfg(feature = "dim3")]
+    #[serde(default)]
+    pub z_min: Option<Real>,
+    /// material at z > z_max leaves (m; 3D only).
+    #[cfg(feature = "dim3")]
+    #[serde(default)]
+    pub z_max: Option<Real>,
+}
+
+impl Outflow {
+    /// true when at least one face lets material leave.
+    pub fn any(&self) -> bool {
+        #[cfg(feature = "dim3")]
+        if self.z_min.is_some() || self.z_max.is_some() {
+            return true;
+        }
+        self.x_min.is_some() || self.x_max.is_some()
+    }
+
+    /// true when a particle at `x` has left through one of the faces.
+    #[inline]
+    pub fn has_left(&self, x: Vector) -> bool {
+        let beyond = |lo: Option<Real>, hi: Option<Real>, c: Real| {
+            lo.is_some_and(|l| c < l) || hi.is_some_and(|h| c > h)
+        };
+        #[cfg(feature = "dim3")]
+        if beyond(self.z_min, self.z_max, x.z) {
+            return true;
+        }
+        beyond(self.x_min, self.x_max, x.x)
+    }
+
+    /// the faces' coordinates with their names, for checks.
+    fn planes(&self) -> Vec<(&'static str, Real)> {
+        let mut v = Vec::new();
+        let named = [("outflow.x_min", self.x_min), ("outflow.x_max", self.x_max)];
+        v.extend(named.into_iter().filter_map(|(n, c)| c.map(|c| (n, c))));
+        #[cfg(feature = "dim3")]
+        {
+            let named = [("outflow.z_min", self.z_min), ("outflow.z_max", self.z_max)];
+            v.extend(named.into_iter().filter_map(|(n, c)| c.map(|c| (n, c))));
+        }
+        v
+    }
+}
+
 /// The friction of two parallel side walls a distance `width` apart across the plane of a
 /// plane-strain run (a flume or channel of that width): each acts on the material with the
 /// traction `friction · |σ_zz|` against its in-plane velocity, a body force
@@ -244,6 +304,9 @@ pub struct SolverConfig {
     /// A periodic pair of sides in x (`None`: the sides are walls or open).
     #[serde(default)]
     pub periodic: Option<Periodic>,
+    /// Faces of the grid's sides through which material leaves the run (none by default).
+    #[serde(default)]
+    pub outflow: Outflow,
     /// Walls anywhere, beside the grid's own sides: planes or segments at any position and angle
     /// (an inclined retaining wall, a check dam inside the domain). Under [`Contact::Surface`] a
     /// wall holds the nodes near it where material touches it, under [`Contact::Node`] the nodes
@@ -320,6 +383,7 @@ impl Default for SolverConfig {
             gravity: Vector::NEG_Y * STANDARD_GRAVITY,
             boundaries: Boundaries::default(),
             periodic: None,
+            outflow: Outflow::default(),
             walls: Vec::new(),
             #[cfg(not(feature = "dim3"))]
             side_walls: None,
@@ -517,6 +581,42 @@ impl SolverConfig {
                     expected: "no walls beside periodic sides (not supported yet)",
                 });
             }
+        }
+        if let Some((name, value)) = self.outflow.planes().into_iter().find(|(_, c)| !c.is_finite())
+        {
+            return Err(SolverError::InvalidSetting {
+                name,
+                value,
+                expected: "a finite coordinate of the outflow face (m)",
+            });
+        }
+        if let (Some(lo), Some(hi)) = (self.outflow.x_min, self.outflow.x_max)
+            && lo >= hi
+        {
+            return Err(SolverError::InvalidSetting {
+                name: "outflow.x_max",
+                value: hi,
+                expected: "an outflow face beyond x_min",
+            });
+        }
+        #[cfg(feature = "dim3")]
+        if let (Some(lo), Some(hi)) = (self.outflow.z_min, self.outflow.z_max)
+            && lo >= hi
+        {
+            return Err(SolverError::InvalidSetting {
+                name: "outflow.z_max",
+                value: hi,
+                expected: "an outflow face beyond z_min",
+            });
+        }
+        if let Some(p) = self.periodic
+            && (self.outflow.x_min.is_some() || self.outflow.x_max.is_some())
+        {
+            return Err(SolverError::InvalidSetting {
+                name: "outflow",
+                value: p.length,
+                expected: "periodic sides without outflow faces along x",
+            });
         }
         // (each boundary's loads are indexed by a u16: `loads.rs`)
         if self.walls.len() > usize::from(u16::MAX) - crate::SIDES - 1 {

@@ -40,7 +40,12 @@ pub struct EnergyLedger {
     pub side_wall_friction: Real,
     /// Work of non-conservative external loads since the start.
     pub external_work: Real,
-    /// (stored + dissipated) − (initial stored + external work).
+    /// Energy (kinetic, elastic and potential, as the stored terms count them) carried out of
+    /// the run by particles that left through outflow faces since the start
+    /// ([`crate::Outflow`]; 0 without them). Neither stored nor dissipated: it left.
+    #[serde(default)]
+    pub outflow: Real,
+    /// (stored + dissipated + outflow) − (initial stored + external work).
     pub residual: Real,
 }
 
@@ -59,9 +64,10 @@ impl EnergyLedger {
             + self.side_wall_friction
     }
 
-    /// stored + dissipated: constant for a perfect integrator without external work.
+    /// stored + dissipated + what left through outflow faces: constant for a perfect integrator
+    /// without external work.
     pub fn total(&self) -> Real {
-        self.stored() + self.dissipated()
+        self.stored() + self.dissipated() + self.outflow
     }
 }
 
@@ -86,6 +92,26 @@ pub struct Dissipation {
     /// gravity's, it is the change of the material's momentum (a check of conservation).
     #[serde(default)]
     pub impulse: Vector,
+    /// What left the run through outflow faces ([`crate::Outflow`]).
+    #[serde(default)]
+    pub outflow: Outflowed,
+}
+
+/// What particles took with them when they left the run through outflow faces, summed over
+/// the run (in particle order within a step, so the same bits for any thread count).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Outflowed {
+    /// particles that left.
+    pub particles: u64,
+    /// their mass (kg; kg per metre of thickness in plane strain).
+    pub mass: Real,
+    /// their momentum Σ m_p v_p as they left (N·s; per metre in plane strain).
+    pub momentum: Vector,
+    /// their energy as they left: kinetic, elastic and potential, as the ledger counts them (J;
+    /// J/m in plane strain).
+    pub energy: Real,
+    /// when the first one left (s); `None` while none has.
+    pub first_time: Option<Real>,
 }
 
 /// The size of a run's energy error, judged against the energy the run can move around.

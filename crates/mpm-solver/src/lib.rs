@@ -70,9 +70,10 @@ mod stages;
 
 pub use config::{
     Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT, MassMatrix,
-    Periodic, PicWeighting, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig, TimeStep, Transfer,
+    Outflow, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig, TimeStep,
+    Transfer,
 };
-pub use energy::{Dissipation, EnergyCheck, EnergyLedger};
+pub use energy::{Dissipation, EnergyCheck, EnergyLedger, Outflowed};
 pub use error::{Field, SolverError};
 #[cfg(not(feature = "dim3"))]
 pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleReport};

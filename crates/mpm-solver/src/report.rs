@@ -102,4 +102,10 @@ pub struct Checkpoint<St> {
     /// Lightest initial density of each material (kg/m³): the time step's reference (see
     /// `stages/timestep.rs`); empty in a new run, where the particles' densities set it.
     pub reference_density: Vec<Real>,
+    /// The run's small-mass threshold and APIC's cell mass (kg; kg/m in plane strain), as the
+    /// particles it started with set them; empty in a new run, where the particles set them.
+    /// Kept so that a run some of whose particles have left through outflow faces resumes with
+    /// the scales it ran with.
+    #[serde(default)]
+    pub mass_scales: Vec<Real>,
 }

@@ -130,6 +130,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 loads: Vec::new(),
                 initial_stored: f64::NAN,
                 reference_density: Vec::new(),
+                mass_scales: Vec::new(),
             },
         )
     }
@@ -149,7 +150,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             )
         };
         let particles = checkpoint.particles;
-        if particles.is_empty() {
+        // (a run all of whose particles have left through outflow faces has none, and stands
+        // still until its end time)
+        if particles.is_empty() && checkpoint.dissipation.outflow.particles == 0 {
             return Err(SolverError::NoParticles);
         }
         if materials.is_empty() || materials.len() > usize::from(u16::MAX) + 1 {
@@ -224,6 +227,18 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             .map(|i| particles.mass[i] / reference_density[usize::from(particles.material[i])])
             .sum();
         let cell_mass = particles.total_mass() / reference_volume * cell_size.powi(DIM as i32);
+        // a resumed run keeps the scales it started with (particles may have left since)
+        let (small_mass, cell_mass) = match checkpoint.mass_scales[..] {
+            [] => (small_mass, cell_mass),
+            [s, c] if s >= 0.0 && s.is_finite() && c > 0.0 && c.is_finite() => (s, c),
+            _ => {
+                return Err(SolverError::InvalidSetting {
+                    name: "checkpoint.mass_scales",
+                    value: checkpoint.mass_scales.first().copied().unwrap_or(Real::NAN),
+                    expected: "a finite small-mass threshold ≥ 0 and a positive cell mass (kg)",
+                });
+            }
+        };
         let mut solver = Self {
             shape,
             materials,
@@ -279,6 +294,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             loads: self.loads.clone(),
             initial_stored: self.initial_stored,
             reference_density: self.reference_density.clone(),
+            mass_scales: vec![self.small_mass, self.cell_mass],
         }
     }
 
@@ -363,6 +379,11 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.time
     }
 
+    /// what left the run through outflow faces so far ([`crate::Outflow`]).
+    pub fn outflowed(&self) -> crate::Outflowed {
+        self.dissipation.outflow
+    }
+
     /// the impulse the boundaries (grid sides and walls) gave the material since the start
     /// (N·s per m of thickness): the change of its momentum is this plus gravity's impulse,
     /// except where the small-mass rule (§2(3)) dropped a light node's internal force (which
@@ -436,6 +457,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             transfer_dissipation: self.dissipation.transfer,
             side_wall_friction: self.dissipation.side_walls,
             external_work: self.dissipation.external,
+            outflow: self.dissipation.outflow.energy,
             residual: 0.0,
         };
         e.residual = e.total() - (self.initial_stored + e.external_work);
@@ -462,6 +484,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 
     /// [`Solver::step_capped`]'s step, on whatever thread calls it.
     fn advance(&mut self, max_dt: Real) -> Result<StepReport, SolverError> {
+        if self.particles.is_empty() {
+            return Err(SolverError::InvalidSetting {
+                name: "particles",
+                value: 0.0,
+                expected: "a particle to step: every particle has left through the outflow faces",
+            });
+        }
         if !self.body_force.is_empty() && self.body_force.len() != self.particles.len() {
             return Err(SolverError::InvalidSetting {
                 name: "body_force",
@@ -544,6 +573,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.step += 1;
         // (the guard may re-locate: the report counts this step's nodes)
         let active_nodes = self.scratch.active.len();
+        self.leave_through_outflow();
         self.check_inside()?;
         self.last =
             StepReport { step: self.step, time: self.time, dt, courant, active_nodes, branches };
@@ -592,6 +622,42 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.dissipation.external += supplied;
     }
 
+    /// Outflow faces ([`crate::Outflow`]): at the end of a step, the particles beyond one leave
+    /// the run. What they carry out (their mass, momentum, and their kinetic, elastic and
+    /// potential energy as [`Solver::energy`] counts them at this time) is booked, so that the
+    /// ledger's residual is the same before and after they go (to round-off). The remaining
+    /// particles keep their order; the stencils computed for the next step are dropped, and the
+    /// guard that follows locates the particles again. Nothing without outflow faces, and one
+    /// comparison per particle with them.
+    fn leave_through_outflow(&mut self) {
+        let outflow = self.config.outflow;
+        if !outflow.any() {
+            return;
+        }
+        let p = &self.particles;
+        if !p.position.iter().any(|&x| outflow.has_left(x)) {
+            return;
+        }
+        let leaving: Vec<bool> = p.position.iter().map(|&x| outflow.has_left(x)).collect();
+        let g = self.config.gravity_at(self.time);
+        let gone = &mut self.dissipation.outflow;
+        for i in (0..p.len()).filter(|&i| leaving[i]) {
+            let m = &self.materials[usize::from(p.material[i])];
+            let stress = crate::math::full_stress(&p.stress[i]);
+            gone.particles += 1;
+            gone.mass += p.mass[i];
+            gone.momentum += p.mass[i] * p.velocity[i];
+            gone.energy += 0.5 * p.mass[i] * p.velocity[i].length_squared()
+                + p.volume[i] * m.stored_energy_density(&stress, &p.state[i])
+                - p.mass[i] * g.dot(p.position[i]);
+        }
+        gone.first_time.get_or_insert(self.time);
+        self.particles.retain(|i| !leaving[i], &mut self.body_force);
+        self.scratch.stencils_ahead = None;
+        self.scratch.located = false;
+        self.next_signal = None;
+    }
+
     /// the end-of-step guard: every particle is still inside the grid (G2P already checked that
     /// positions and velocities are finite). The stress update that ends USL, MUSL and USAVG
     /// found each particle's next stencil, so this costs nothing there; otherwise (USF, or a
@@ -623,6 +689,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     ) -> Result<RunEnd, SolverError> {
         // A remainder this small relative to the end time is rounding, not a step to take.
         while !reached(self.time, end_time) {
+            if self.particles.is_empty() {
+                // Every particle has left through the outflow faces: nothing changes until the
+                // end time, and the clock goes there.
+                self.time = end_time;
+                return Ok(RunEnd::EndTime);
+            }
             let report = self.step_capped(end_time - self.time)?;
             if observer.after_step(self, &report).is_break() {
                 return Ok(RunEnd::Stopped);
@@ -679,6 +751,67 @@ mod tests {
                 other => panic!("{scheme:?}: {other:?}"),
             }
         }
+    }
+
+    /// An outflow face takes particles out of the run and books what they carry. An elastic
+    /// block (stressed by its weight) slides at 3 m/s on a frictionless floor towards an outflow
+    /// face at x = 2 m; the same block on a grid twice as long, with no face, is the reference.
+    /// The two runs are the same bits until a particle crosses x = 2 (the face's nodes are free,
+    /// as interior nodes are). At that step the ledger's total (stored + dissipated + outflow)
+    /// equals the reference's to round-off (1e-12 of the kinetic energy), and the outflow's
+    /// mass, momentum and energy are the leaving particles' in the reference. Then every
+    /// particle leaves: the mass and the horizontal momentum (a frictionless floor gives none)
+    /// are all in the outflow, and the run ends at its end time with no particle.
+    #[test]
+    fn a_block_sliding_off_an_outflow_face_takes_its_mass_momentum_and_energy_out() {
+        let solver = |cells: usize, outflow: Option<f64>| {
+            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.1), [cells, 6]).unwrap();
+            let mut particles = Particles::default();
+            for k in 0..24 {
+                let x = Vector::new(1.025 + 0.05 * (k % 8) as f64, 0.025 + 0.05 * (k / 8) as f64);
+                let mut p = NewParticle::unstressed(x, Vector::new(3.0, 0.0), 0.0025, 1000.0, ());
+                p.stress.yy = -1000.0 * 9.81 * (0.15 - x.y);
+                particles.push(p);
+            }
+            let config = SolverConfig {
+                boundaries: crate::Boundaries {
+                    ground: Some(mpm_contact::Friction::Coulomb { mu: 0.0 }),
+                    ..Default::default()
+                },
+                outflow: crate::Outflow { x_max: outflow, ..Default::default() },
+                ..Default::default()
+            };
+            let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+            Solver::new(Bilinear(grid), vec![material], particles, config).unwrap()
+        };
+        let (mut out, mut reference) = (solver(20, Some(2.0)), solver(40, None));
+        let (mass, momentum) = (out.particles().total_mass(), out.particles().momentum());
+        loop {
+            out.step().unwrap();
+            reference.step().unwrap();
+            if !out.particles().is_empty() && out.particles().len() == reference.particles().len() {
+                assert_eq!(out.particles(), reference.particles());
+                continue;
+            }
+            let (e, r) = (out.energy(), reference.energy());
+            assert!((e.total() - r.total()).abs() < 1e-12 * r.kinetic, "{e:?}\n{r:?}");
+            let p = reference.particles();
+            let left: Vec<usize> = (0..p.len()).filter(|&i| p.position[i].x > 2.0).collect();
+            let gone = out.dissipation.outflow;
+            assert_eq!(gone.particles, left.len() as u64);
+            assert_eq!(gone.first_time, Some(out.time()));
+            let m: f64 = left.iter().map(|&i| p.mass[i]).sum();
+            let mv: Vector = left.iter().map(|&i| p.mass[i] * p.velocity[i]).sum();
+            assert!((gone.mass - m).abs() < 1e-12 * m && (gone.momentum - mv).length() < 1e-9);
+            break;
+        }
+        assert_eq!(out.run_until(1.0, &mut ()).unwrap(), RunEnd::EndTime);
+        assert!(out.particles().is_empty() && out.time() == 1.0);
+        let gone = out.dissipation.outflow;
+        assert_eq!(gone.particles, 24);
+        assert!((gone.mass - mass).abs() < 1e-12 * mass, "{gone:?}");
+        assert!((gone.momentum.x - momentum.x).abs() < 1e-9 * momentum.x, "{gone:?}");
+        assert!(out.step().is_err(), "nothing is left to step");
     }
 
     /// `estimated_bytes` charges every shape's factors at most `FACTORS_4` / `FACTORS_9`: a

@@ -8,7 +8,8 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// One boundary's law: `{ friction = μ }`, `{ friction_angle_deg = φ_b }`, `"rough"`, `"fixed"`
-/// or `"frictionless"`.
+/// or `"frictionless"`; or, on a side face of the grid, `"outflow"` (material leaves the run
+/// through it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BoundarySpec {
     /// Coulomb friction with coefficient μ.
@@ -21,9 +22,11 @@ pub enum BoundarySpec {
     Fixed,
     /// μ = 0 (a roller).
     Frictionless,
+    /// no boundary: material that crosses the face leaves the run (side faces of the grid only).
+    Outflow,
 }
 
-const BOUNDARY_NAMES: &[&str] = &["rough", "fixed", "frictionless"];
+const BOUNDARY_NAMES: &[&str] = &["rough", "fixed", "frictionless", "outflow"];
 const BOUNDARY_KEYS: &[&str] = &["friction", "friction_angle_deg"];
 
 impl<'de> Deserialize<'de> for BoundarySpec {
@@ -33,8 +36,8 @@ impl<'de> Deserialize<'de> for BoundarySpec {
             type Value = BoundarySpec;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 f.write_str(
-                    "\"rough\", \"fixed\", \"frictionless\", { friction = μ } or \
-                     { friction_angle_deg = φ }",
+                    "\"rough\", \"fixed\", \"frictionless\", { friction = μ }, \
+                     { friction_angle_deg = φ } or (a side face) \"outflow\"",
                 )
             }
             fn visit_str<E: de::Error>(self, v: &str) -> Result<BoundarySpec, E> {
@@ -42,6 +45,7 @@ impl<'de> Deserialize<'de> for BoundarySpec {
                     "rough" => Ok(BoundarySpec::Rough),
                     "fixed" => Ok(BoundarySpec::Fixed),
                     "frictionless" => Ok(BoundarySpec::Frictionless),
+                    "outflow" => Ok(BoundarySpec::Outflow),
                     other => Err(E::unknown_variant(other, BOUNDARY_NAMES)),
                 }
             }
@@ -83,6 +87,7 @@ impl Serialize for BoundarySpec {
             BoundarySpec::Rough => s.serialize_str("rough"),
             BoundarySpec::Fixed => s.serialize_str("fixed"),
             BoundarySpec::Frictionless => s.serialize_str("frictionless"),
+            BoundarySpec::Outflow => s.serialize_str("outflow"),
         }
     }
 }

@@ -537,11 +537,20 @@ macro_rules! registry {
         }
 
         impl SavedState {
-            /// (simulated time, steps, particles) of the stored state.
-            pub fn clock(&self) -> (f64, u64, usize) {
+            /// (simulated time, steps, particles the run started with) of the stored state:
+            /// the particles it holds and those that left through outflow faces.
+            pub fn clock(&self) -> (f64, u64, u64) {
                 match self {
-                    $( SavedState::$state(c) => (c.time, c.step, c.particles.len()), )*
-                    $( SavedState::$space(c) => (c.time, c.step, c.particles.len()), )*
+                    $( SavedState::$state(c) => (
+                        c.time,
+                        c.step,
+                        (c.particles.len() as u64).saturating_add(c.dissipation.outflow.particles),
+                    ), )*
+                    $( SavedState::$space(c) => (
+                        c.time,
+                        c.step,
+                        (c.particles.len() as u64).saturating_add(c.dissipation.outflow.particles),
+                    ), )*
                 }
             }
 

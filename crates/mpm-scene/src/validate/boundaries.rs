@@ -1,7 +1,7 @@
 //! `[boundaries]`: the Coulomb node boundaries (eqs 14–18) of the ground and the walls.
 
 use mpm_contact::{Boundary, ContactError, Friction, Wall};
-use mpm_solver::{Boundaries, Periodic, SideWalls, Vector};
+use mpm_solver::{Boundaries, Outflow, Periodic, SideWalls, Vector};
 
 use super::Ctx;
 use crate::error::SceneError;
@@ -53,18 +53,48 @@ pub(super) fn periodic(
     }))
 }
 
-/// The friction law of each declared side of the grid.
-pub(super) fn build(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Boundaries, SceneError> {
+/// The friction law of each declared side of the grid, and the sides declared `"outflow"`.
+pub(super) fn build(
+    ctx: &Ctx<'_>,
+    f: &SceneFile,
+    grid: &GridBuilt,
+) -> Result<(Boundaries, Outflow), SceneError> {
     let mut boundaries = Boundaries::default();
-    for (name, spec, slot) in [
-        ("ground", f.boundaries.ground, &mut boundaries.ground),
-        ("left_wall", f.boundaries.left_wall, &mut boundaries.left_wall),
-        ("right_wall", f.boundaries.right_wall, &mut boundaries.right_wall),
+    let mut outflow = Outflow::default();
+    let (x0, x1) = grid.x_range();
+    for (name, spec, slot, face) in [
+        ("ground", f.boundaries.ground, &mut boundaries.ground, None),
+        ("left_wall", f.boundaries.left_wall, &mut boundaries.left_wall, Some(&mut outflow.x_min)),
+        (
+            "right_wall",
+            f.boundaries.right_wall,
+            &mut boundaries.right_wall,
+            Some(&mut outflow.x_max),
+        ),
     ] {
         let Some(spec) = spec else { continue };
-        *slot = Some(friction(ctx, &format!("boundaries.{name}"), spec)?);
+        match (spec, face) {
+            (BoundarySpec::Outflow, Some(face)) => {
+                *face = Some(if name == "left_wall" { x0 } else { x1 });
+            }
+            _ => *slot = Some(friction(ctx, &format!("boundaries.{name}"), spec)?),
+        }
     }
-    Ok(boundaries)
+    Ok((boundaries, outflow))
+}
+
+/// `"outflow"` where only a friction law goes: the ground, a wall anywhere.
+fn not_a_law(ctx: &Ctx<'_>, path: &str) -> SceneError {
+    ctx.err(
+        path,
+        Some("\"outflow\"".into()),
+        "`outflow` is a kind of side face of the grid (material leaves the run through it), \
+         not a friction law",
+        "a friction law: \"rough\", \"fixed\", \"frictionless\", { friction = μ } or \
+         { friction_angle_deg = φ }",
+        "give a friction law here; `outflow` goes on `left_wall` or `right_wall` (and \
+         `back_wall`, `front_wall` in 3D)",
+    )
 }
 
 /// `[[boundaries.walls]]`: each wall as the solver takes it; refused beside periodic sides, and
@@ -175,6 +205,7 @@ fn friction(ctx: &Ctx<'_>, path: &str, spec: BoundarySpec) -> Result<Friction, S
         BoundarySpec::Rough => Friction::Rough,
         BoundarySpec::Fixed => Friction::Fixed,
         BoundarySpec::Frictionless => Friction::Coulomb { mu: 0.0 },
+        BoundarySpec::Outflow => return Err(not_a_law(ctx, path)),
     })
 }
 

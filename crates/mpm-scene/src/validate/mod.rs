@@ -331,7 +331,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
     let (materials, used) = materials::select(ctx, &f.materials, &bodies, &built)?;
     let (seeds, spacing, gimp_ppc) =
         bodies::seeds(ctx, f, &grid, cell_x, shape_function, &materials, &used)?;
-    let boundaries = boundaries::build(ctx, f)?;
+    let (boundaries, outflow) = boundaries::build(ctx, f, &grid)?;
     let periodic = boundaries::periodic(ctx, f, &grid)?;
     let walls = boundaries::walls(ctx, f, &grid, &seeds)?;
     let side_walls = boundaries::side_walls(ctx, f)?;
@@ -339,7 +339,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         ctx,
         &f.solver,
         &settings,
-        (boundaries, periodic, walls, side_walls),
+        (boundaries, periodic, walls, side_walls, outflow),
         &materials,
     )?;
     let initial_dt =
@@ -361,6 +361,17 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         &config.boundaries,
         config.gravity,
     )?;
+    if config.outflow.any() && !output.probes.is_empty() {
+        // a probe names a particle by its place in the arrays, which changes when one leaves
+        return Err(ctx.err(
+            "output.probes",
+            None,
+            "probes cannot follow particles beside outflow faces yet (a probe is a particle's \
+             place in the run, which changes when particles leave)",
+            "probes, or outflow faces",
+            "remove the probes, or give the outflow faces a friction law",
+        ));
+    }
     let warnings = plausible::warnings(ctx, f, config.gravity.length())?;
     Ok(Resolved {
         grid,

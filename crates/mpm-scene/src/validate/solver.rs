@@ -188,11 +188,12 @@ pub(super) fn config(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
     settings: &Settings,
-    (boundaries, periodic, walls, side_walls): (
+    (boundaries, periodic, walls, side_walls, outflow): (
         Boundaries,
         Option<Periodic>,
         Vec<Wall>,
         Option<mpm_solver::SideWalls>,
+        mpm_solver::Outflow,
     ),
     materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
@@ -209,6 +210,7 @@ pub(super) fn config(
         gravity: settings.gravity,
         boundaries,
         periodic,
+        outflow,
         walls,
         side_walls,
         small_mass_ratio: settings.small_mass_ratio,

@@ -10,7 +10,7 @@ use mpm_solver3d::generate::{self, Shape};
 // the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
 // build's), converted below
 use mpm_solver3d::{
-    Boundaries, Contact, MassMatrix, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme,
+    Boundaries, Contact, MassMatrix, Outflow, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme,
     SolverConfig, TimeStep, Transfer, Vector,
 };
 
@@ -990,12 +990,26 @@ fn config(
     materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
     let b = &f.boundaries;
+    // a side declared `"outflow"` has no law; it lets material leave through its plane
+    let side = |path: &str, spec: Option<BoundarySpec>| match spec {
+        Some(BoundarySpec::Outflow) => Ok(None),
+        other => law(ctx, path, other),
+    };
     let boundaries = Boundaries {
         ground: law(ctx, "boundaries.ground", b.ground)?,
-        left_wall: law(ctx, "boundaries.left_wall", b.left_wall)?,
-        right_wall: law(ctx, "boundaries.right_wall", b.right_wall)?,
-        back_wall: law(ctx, "boundaries.back_wall", b.back_wall)?,
-        front_wall: law(ctx, "boundaries.front_wall", b.front_wall)?,
+        left_wall: side("boundaries.left_wall", b.left_wall)?,
+        right_wall: side("boundaries.right_wall", b.right_wall)?,
+        back_wall: side("boundaries.back_wall", b.back_wall)?,
+        front_wall: side("boundaries.front_wall", b.front_wall)?,
+    };
+    let ([x0, z0], [x1, z1]) = (grid.plan_origin(), grid.plan_end());
+    let at =
+        |spec: Option<BoundarySpec>, c: f64| (spec == Some(BoundarySpec::Outflow)).then_some(c);
+    let outflow = Outflow {
+        x_min: at(b.left_wall, x0),
+        x_max: at(b.right_wall, x1),
+        z_min: at(b.back_wall, z0),
+        z_max: at(b.front_wall, z1),
     };
     let periodic = if b.periodic {
         if b.left_wall.is_some() || b.right_wall.is_some() {
@@ -1096,6 +1110,7 @@ fn config(
         gravity,
         boundaries,
         periodic,
+        outflow,
         walls,
         small_mass_ratio: settings.small_mass_ratio,
         objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
