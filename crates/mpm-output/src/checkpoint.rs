@@ -41,8 +41,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// solver settings the side walls, the scene registry a Mohr–Coulomb run's state; 13: no
 /// layout change, but APIC's light nodes keep the particle's affine velocity, so an older APIC
 /// run resumed would change its numerics mid-run; 14: the dissipation carries what left through
-/// outflow faces, the energy rows its energy, the solver settings the outflow faces, the history
-/// the watch over the grid's undeclared sides).
+/// outflow faces, the energy rows its energy, the solver settings the outflow faces, the solver
+/// state its mass scales, the particles their unwrapped offsets across periodic sides, the
+/// history the watch over the grid's undeclared sides and a 3D run's initial centre of mass).
 pub const FORMAT: u32 = 14;
 
 /// The checkpoint file name inside an output directory.
@@ -231,6 +232,10 @@ pub struct History {
     /// the watch over the grid's side faces that the scene did not declare.
     #[serde(default)]
     pub edges: Option<mpm_scene::edges::EdgeWatch>,
+    /// a 3D run's centre of mass at t = 0 (m): the reference of its travel, kept because
+    /// particles may leave the run through outflow sides.
+    #[serde(default)]
+    pub initial_centre: Option<[f64; 3]>,
 }
 
 #[cfg(test)]

@@ -189,6 +189,23 @@ struct Flow<'a> {
 }
 
 impl<'a> Flow<'a> {
+    /// the flow with the positions it has had it never wrapped through periodic sides: what
+    /// the runout measures of an endless slope follow (R3-15: the centre of mass of a mass
+    /// thrown across the seam moved backwards).
+    fn unwrapped<St>(r: &Resolved, p: &'a Particles<St>) -> Self {
+        let mut f = Self::of(r, p);
+        if !p.unwrap.is_empty() {
+            let keep = |q: &usize| {
+                r.materials
+                    .flow_mask()
+                    .is_none_or(|m| m.get(usize::from(p.material[*q])).copied().unwrap_or(true))
+            };
+            f.position =
+                Cow::Owned((0..p.len()).filter(keep).map(|q| p.unwrapped_position(q)).collect());
+        }
+        f
+    }
+
     fn of<St>(r: &Resolved, p: &'a Particles<St>) -> Self {
         let Some(mask) = r.materials.flow_mask() else {
             return Self {
@@ -259,7 +276,7 @@ impl Driver<'_> {
         solver: &Solver<M, S, N>,
     ) -> RunoutMetrics {
         let r = self.scene.resolved();
-        let f = Flow::of(r, solver.particles());
+        let f = Flow::unwrapped(r, solver.particles());
         let column = r.grid.column_width();
         summary::runout(
             solver.time(),

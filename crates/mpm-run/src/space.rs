@@ -355,9 +355,14 @@ impl<'a> SpaceDriver<'a> {
             |x| g.ground(x.x, x.z).0,
         );
         let mass: f64 = p.mass.iter().sum();
-        // (from the generation positions: a resumed run's particles have moved)
-        let com0 =
-            p.initial_position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<Vector>() / mass;
+        // (from the generation positions: a resumed run's particles have moved; and kept by
+        // the history, as particles may have left since)
+        let com0 = match history.as_ref().and_then(|h| h.initial_centre) {
+            Some(c) => Vector::from_array(c),
+            None => {
+                p.initial_position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<Vector>() / mass
+            }
+        };
         let spacing = g.plan_cell() / scene.gimp_ppc as f64;
         let plan = scene.output.hazard_maps.then(|| {
             let [nx, _, nz] = g.cells();
@@ -480,6 +485,7 @@ impl<'a> SpaceDriver<'a> {
             plan: self.plan.clone(),
             walls: self.walls.clone(),
             edges: self.edges.clone(),
+            initial_centre: Some(self.com0.to_array()),
         }
     }
 
@@ -537,7 +543,16 @@ impl<'a> SpaceDriver<'a> {
         let plane = |v: &[mpm_solver3d::Vector]| -> Vec<DVec2> {
             keep.iter().map(|&q| DVec2::new(v[q].dot(d), v[q].y)).collect()
         };
-        let (position, velocity) = (plane(&p.position), plane(&p.velocity));
+        // (with periodic sides, the positions the particles have had they never wrapped: the
+        // runout of an endless slope; R3-15)
+        let unwrapped: Vec<mpm_solver3d::Vector>;
+        let at: &[mpm_solver3d::Vector] = if p.unwrap.is_empty() {
+            &p.position
+        } else {
+            unwrapped = (0..p.len()).map(|q| p.unwrapped_position(q)).collect();
+            &unwrapped
+        };
+        let (position, velocity) = (plane(at), plane(&p.velocity));
         let mass: Vec<f64> = keep.iter().map(|&q| p.mass[q]).collect();
         let mut m = summary::runout(
             solver.time(),
@@ -549,15 +564,14 @@ impl<'a> SpaceDriver<'a> {
             self.runout.first(),
         );
         let total: f64 = mass.iter().sum();
-        let com =
-            keep.iter().map(|&q| p.position[q] * p.mass[q]).sum::<mpm_solver3d::Vector>() / total;
+        let com = keep.iter().map(|&q| at[q] * p.mass[q]).sum::<mpm_solver3d::Vector>() / total;
         m.com_travel = (com - self.com0).length();
         // The main mass in plan: the section rule above splits the particles sorted along d at
         // gaps wider than a column, but in 3D the grains beside those thrown ahead close such
         // gaps (the flume extruded: 4.19 m against 3.42 m in 2D). Its front, tail and front
         // speed are taken from the heaviest set of plan cells joined by an edge or a corner.
         let column = self.scene.grid.plan_cell();
-        let plan: Vec<mpm_solver3d::Vector> = keep.iter().map(|&q| p.position[q]).collect();
+        let plan: Vec<mpm_solver3d::Vector> = keep.iter().map(|&q| at[q]).collect();
         let main = main_mass_in_plan(&plan, &mass, column);
         if !main.is_empty() {
             let half = 0.5 * self.spacing;

@@ -33,6 +33,11 @@ pub struct Particles<S> {
     /// nothing for it). Column-major `glam` matrix: C_p · r is the velocity offset at r.
     #[serde(default)]
     pub affine: Vec<Matrix>,
+    /// With periodic sides, the x each particle's wraps took off its position so far: its
+    /// position had it never wrapped is x + `unwrap` (the runout measures of an endless slope
+    /// follow it). Empty (and free) without periodic sides.
+    #[serde(default)]
+    pub unwrap: Vec<Real>,
 }
 
 impl<S> Default for Particles<S> {
@@ -48,6 +53,7 @@ impl<S> Default for Particles<S> {
             body: Vec::new(),
             initial_position: Vec::new(),
             affine: Vec::new(),
+            unwrap: Vec::new(),
         }
     }
 }
@@ -110,6 +116,7 @@ impl<S> Particles<S> {
             body: Vec::with_capacity(n),
             initial_position: Vec::with_capacity(n),
             affine: Vec::new(),
+            unwrap: Vec::new(),
         }
     }
 
@@ -134,6 +141,16 @@ impl<S> Particles<S> {
         self.material.push(p.material);
         self.body.push(p.body);
         self.initial_position.push(p.position);
+    }
+
+    /// particle `p`'s position had it never wrapped through periodic sides (its position
+    /// without them).
+    pub fn unwrapped_position(&self, p: usize) -> Vector {
+        let mut x = self.position[p];
+        if let Some(u) = self.unwrap.get(p) {
+            x.x += u;
+        }
+        x
     }
 
     /// density ρ_p = m_p / V_p of particle `p` (kg/m³).
@@ -176,6 +193,7 @@ impl<S> Particles<S> {
         filter(&mut self.body, &mask);
         filter(&mut self.initial_position, &mask);
         filter(&mut self.affine, &mask);
+        filter(&mut self.unwrap, &mask);
         filter(extra, &mask);
         n - self.len()
     }
@@ -185,6 +203,9 @@ impl<S> Particles<S> {
     pub fn is_consistent(&self) -> bool {
         let n = self.len();
         if !(self.affine.is_empty() || self.affine.len() == n) {
+            return false;
+        }
+        if !(self.unwrap.is_empty() || self.unwrap.len() == n) {
             return false;
         }
         [

@@ -432,6 +432,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             + p.state.capacity() * size_of::<M::State>()
             + (p.material.capacity() + p.body.capacity()) * size_of::<u16>()
             + p.affine.capacity() * size_of::<Matrix>()
+            + p.unwrap.capacity() * size_of::<Real>()
             + self.body_force.capacity() * size_of::<Vector>()
             + self.scratch.heap_bytes()
     }
@@ -606,11 +607,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let Some(periodic) = self.config.periodic else { return };
         let g = self.config.gravity_at(self.time + 0.5 * dt);
         let p = &mut self.particles;
+        if p.unwrap.len() != p.position.len() {
+            p.unwrap.resize(p.position.len(), 0.0);
+        }
         let mut supplied = 0.0;
         for (i, (x, m)) in p.position.iter_mut().zip(&p.mass).enumerate() {
             let shift = -((x.x - periodic.x_min) / periodic.length).floor() * periodic.length;
             if shift != 0.0 && shift.is_finite() {
                 x.x += shift;
+                p.unwrap[i] -= shift;
                 supplied += -m * g.x * shift;
                 // the body force's work counts the unwrapped displacement (advance() sums the
                 // wrapped end positions)
