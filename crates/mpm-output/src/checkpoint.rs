@@ -74,6 +74,19 @@ pub struct CheckpointFile {
     pub state: SavedState,
     /// the output written so far.
     pub history: History,
+    /// the directory the scene's named files are relative to, absolute (`None`: an embedded
+    /// scene), so that a run resumed from another working directory finds them.
+    pub scene_dir: Option<String>,
+    /// the files the scene read, with their fingerprints: a resumed run refuses a changed one.
+    pub inputs: Vec<mpm_scene::inputs::InputFile>,
+}
+
+/// `dir` (a scene's directory, `None` for the working directory) as an absolute path, for
+/// [`CheckpointFile::scene_dir`].
+pub fn absolute_dir(dir: Option<&Path>) -> Option<String> {
+    let cwd = std::env::current_dir().ok()?;
+    let d = cwd.join(dir.unwrap_or(Path::new("")));
+    Some(std::fs::canonicalize(&d).unwrap_or(d).display().to_string())
 }
 
 /// writes `c` to `path` atomically, with its header.

@@ -455,6 +455,8 @@ impl Driver<'_> {
             scene_text: self.scene.text().to_string(),
             state: M::wrap(solver.checkpoint()),
             history: self.history.clone(),
+            scene_dir: crate::run::scene_dir(self.scene.origin(), self.scene.dir()),
+            inputs: self.scene.inputs().to_vec(),
         };
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
     }

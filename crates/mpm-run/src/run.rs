@@ -180,6 +180,29 @@ fn summary_text(dir: &Path) -> Option<String> {
     Some(text)
 }
 
+/// [`CheckpointFile::scene_dir`](checkpoint::CheckpointFile::scene_dir) of a scene from
+/// `origin` whose named files are relative to `dir`: absolute, so that a run resumed from another
+/// working directory finds them (R3-04); `None` for an embedded scene.
+pub(crate) fn scene_dir(origin: &str, dir: Option<&Path>) -> Option<String> {
+    if origin.starts_with("embedded:") {
+        return None;
+    }
+    checkpoint::absolute_dir(dir)
+}
+
+/// the folder of a checkpoint's scene's named files: the absolute one it recorded (R3-04: a
+/// relative path no longer resolved from another working directory), or the scene file's
+/// directory as it was typed.
+pub(crate) fn files_dir(c: &checkpoint::CheckpointFile) -> Option<std::path::PathBuf> {
+    if let Some(d) = &c.scene_dir {
+        return Some(std::path::PathBuf::from(d));
+    }
+    if c.origin.starts_with("embedded:") {
+        return None;
+    }
+    Some(Path::new(&c.origin).parent().unwrap_or(Path::new("")).to_path_buf())
+}
+
 /// the `scene_hash` of the folder's `summary.json`, if it has one that reads.
 fn summary_scene_hash(dir: &Path) -> Option<String> {
     let v: serde_json::Value = serde_json::from_str(&summary_text(dir)?).ok()?;
@@ -279,13 +302,15 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
         }));
     }
     // files the scene names (DEMs, CSV polylines) are relative to the scene file's directory
-    let scene = match Path::new(&c.origin).parent() {
-        Some(d) if !c.origin.starts_with("embedded:") => {
-            mpm_scene::load_scene_str_in(&c.scene_text, &c.origin, d)?
-        }
-        _ => load_scene_str(&c.scene_text, &c.origin)?,
+    let scene = match files_dir(&c) {
+        Some(d) => mpm_scene::load_scene_str_in(&c.scene_text, &c.origin, &d)?,
+        None => load_scene_str(&c.scene_text, &c.origin)?,
     };
-    fits_its_scene(&c, &scene).map_err(|reason| OutputError::Checkpoint { path, reason })?;
+    fits_its_scene(&c, &scene)
+        .map_err(|reason| OutputError::Checkpoint { path: path.clone(), reason })?;
+    if let Some(reason) = mpm_scene::inputs::changed(&c.inputs, scene.inputs()) {
+        return Err(RunError::Output(OutputError::Checkpoint { path, reason }));
+    }
     with_pool(opts, scene.resolved().seeds.len(), |threads| {
         dispatch::dispatch(
             &scene,

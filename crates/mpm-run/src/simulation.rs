@@ -412,6 +412,8 @@ impl Job for Worker {
                         scene_text: scene.text().to_string(),
                         state: M::wrap(solver.checkpoint()),
                         history: history.clone(),
+                        scene_dir: crate::run::scene_dir(scene.origin(), scene.dir()),
+                        inputs: scene.inputs().to_vec(),
                     },
                 )),
             };

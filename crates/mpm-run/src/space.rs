@@ -188,8 +188,13 @@ pub(crate) fn resume_space(
     let refuse =
         |reason: String| RunError::Output(OutputError::Checkpoint { path: path.clone(), reason });
     // (a terrain grid's DEM is relative to the scene file's directory, as when it started)
-    let scene_dir = Path::new(&c.origin).parent().unwrap_or(Path::new(""));
-    let scene = mpm_scene::load_space_str_in(&c.scene_text, &c.origin, scene_dir)?;
+    let scene = match crate::run::files_dir(&c) {
+        Some(d) => mpm_scene::load_space_str_in(&c.scene_text, &c.origin, &d)?,
+        None => mpm_scene::load_space_str(&c.scene_text, &c.origin)?,
+    };
+    if let Some(reason) = mpm_scene::inputs::changed(&c.inputs, scene.inputs()) {
+        return Err(refuse(reason));
+    }
     if c.state.dimension() != 3 {
         return Err(refuse("its scene is a 3D scene but its state is a 2D run's".into()));
     }
@@ -502,6 +507,8 @@ impl<'a> SpaceDriver<'a> {
             scene_text: self.scene.text().to_string(),
             state: M::wrap_space(solver.checkpoint()),
             history: self.history(solver.particles().len(), solver.step_count()),
+            scene_dir: crate::run::scene_dir(self.scene.origin(), self.scene.dir()),
+            inputs: self.scene.inputs().to_vec(),
         };
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
     }

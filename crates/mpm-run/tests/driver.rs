@@ -486,3 +486,88 @@ fn a_sliding_block_loads_the_floor_with_its_weight_and_its_friction() {
     assert!((ground.peak_shear_force / ground.peak_normal_force - 0.3).abs() < 0.01, "{ground:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// R3-04: a terrain run resumed from its checkpoint reads its DEM again, and refuses one that is
+/// not the file it started on (naming it), instead of running the rest on another terrain; the
+/// checkpoint records the scene's folder as an absolute path, so that a resume from another
+/// working directory finds the DEM (the scene is loaded here by a path relative to the working
+/// directory, as a user types it).
+#[test]
+fn a_resumed_terrain_run_refuses_a_changed_dem_and_finds_it_from_anywhere() {
+    let base = std::env::temp_dir().join(format!("mpm-resume-dem-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let dem = |drop: f64| {
+        let mut t = String::from("ncols 12\nnrows 8\nxllcorner 0\nyllcorner 0\ncellsize 0.25\n");
+        for _ in 0..8 {
+            let row: Vec<String> =
+                (0..12).map(|c| format!("{}", 3.0 - 0.4 * (c as f64 * 0.25) - drop)).collect();
+            t += &(row.join(" ") + "\n");
+        }
+        t
+    };
+    std::fs::write(base.join("plane.asc"), dem(0.0)).unwrap();
+    let text = r#"
+[grid]
+dimension = 3
+kind = "terrain"
+dem = "plane.asc"
+from = [0.125, 0.125]
+to = [2.875, 1.875]
+plan_cell = 0.25
+layer_height = 0.25
+layers = 6
+[materials.sand]
+kind = "drucker_prager"
+young = 2.0e6
+poisson = 0.3
+density = 1600.0
+cohesion = 0.0
+friction_angle_deg = 33.0
+cone_match = "outer"
+[[bodies]]
+material = "sand"
+shape = "box"
+min = [0.5, 1.0, -1.5]
+max = [1.0, 3.5, -0.5]
+[boundaries]
+ground = { friction_angle_deg = 25.0 }
+left_wall = "frictionless"
+right_wall = "frictionless"
+back_wall = "frictionless"
+front_wall = "frictionless"
+[solver]
+end_time = 0.3
+[output]
+vtk = false
+plots = false
+"#;
+    // the scene's folder as a path relative to the working directory
+    let cwd = std::env::current_dir().unwrap();
+    let up = cwd.components().count() - 1;
+    let relative = std::path::PathBuf::from("../".repeat(up)).join(base.strip_prefix("/").unwrap());
+    let scene = mpm_scene::load_space_str_in(text, "scene.toml", &relative).unwrap();
+    let part = base.join("part");
+    let opts =
+        RunOptions { out_dir: Some(part.clone()), stop_after: Some(0.1), ..Default::default() };
+    let s = mpm_run::run_space_scene(&scene, &opts).unwrap();
+    assert_eq!(s.status, mpm_scene::RunStatus::Interrupted);
+    let c = checkpoint::read(&part.join(checkpoint::FILE_NAME)).unwrap();
+    let recorded = c.scene_dir.clone().unwrap();
+    assert!(std::path::Path::new(&recorded).is_absolute(), "{recorded}");
+    assert_eq!(std::fs::canonicalize(&recorded).unwrap(), std::fs::canonicalize(&base).unwrap());
+    assert_eq!(c.inputs.len(), 1, "{:?}", c.inputs);
+    // the DEM lowered by 0.1 m: refused, naming it, and nothing is run
+    std::fs::write(base.join("plane.asc"), dem(0.1)).unwrap();
+    match resume(&part, &RunOptions::default()) {
+        Err(RunError::Output(OutputError::Checkpoint { reason, .. })) => {
+            assert!(reason.contains("`plane.asc`"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // the DEM restored: the run goes on to its end
+    std::fs::write(base.join("plane.asc"), dem(0.0)).unwrap();
+    let r = resume(&part, &RunOptions::default()).unwrap();
+    assert_eq!(r.status, mpm_scene::RunStatus::Completed);
+    std::fs::remove_dir_all(&base).unwrap();
+}

@@ -39,6 +39,7 @@ pub mod envelope;
 mod error;
 pub mod file;
 mod ground;
+pub mod inputs;
 pub mod limits;
 pub mod materials;
 pub mod observed;

@@ -17,6 +17,8 @@ pub struct Scene {
     pub(crate) r: Resolved,
     /// the directory the scene's named files are relative to.
     pub(crate) dir: Option<std::path::PathBuf>,
+    /// the files it read, with their contents' fingerprints.
+    pub(crate) inputs: Vec<crate::inputs::InputFile>,
 }
 
 /// A value inside its range that is most likely a unit or convention mistake (a friction angle
@@ -266,6 +268,16 @@ impl Scene {
     /// where the text came from (a path or `embedded:NAME`).
     pub fn origin(&self) -> &str {
         &self.origin
+    }
+
+    /// the files the scene read (DEMs, rasters, CSV polylines), with their fingerprints.
+    pub fn inputs(&self) -> &[crate::inputs::InputFile] {
+        &self.inputs
+    }
+
+    /// the directory its named files are relative to (`None`: the working directory).
+    pub fn dir(&self) -> Option<&std::path::Path> {
+        self.dir.as_deref()
     }
 
     /// the scene's text.

@@ -19,6 +19,8 @@ use crate::scene::{EnergyAlarm, MaterialsBuilt, StopAtRest, Warning};
 pub struct SpaceScene {
     /// the directory the scene's named files (a terrain grid's DEM) are relative to.
     pub(crate) dir: Option<std::path::PathBuf>,
+    /// the files it read, with their contents' fingerprints.
+    pub(crate) inputs: Vec<crate::inputs::InputFile>,
     pub(crate) origin: String,
     pub(crate) text: String,
     pub(crate) file: SpaceFile,
@@ -177,6 +179,16 @@ impl SpaceScene {
     /// where the text came from.
     pub fn origin(&self) -> &str {
         &self.origin
+    }
+
+    /// the files the scene read (the DEM, rasters), with their fingerprints.
+    pub fn inputs(&self) -> &[crate::inputs::InputFile] {
+        &self.inputs
+    }
+
+    /// the directory its named files are relative to (`None`: the working directory).
+    pub fn dir(&self) -> Option<&std::path::Path> {
+        self.dir.as_deref()
     }
 
     /// the scene's text.

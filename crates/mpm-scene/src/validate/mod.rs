@@ -48,6 +48,8 @@ struct Ctx<'a> {
     map: &'a SourceMap,
     /// the directory that files named in the scene are relative to (the scene file's).
     dir: Option<&'a std::path::Path>,
+    /// the files the scene named, as named and as found, in the order it named them.
+    inputs: std::cell::RefCell<Vec<(String, std::path::PathBuf)>>,
 }
 
 impl Ctx<'_> {
@@ -155,7 +157,7 @@ pub fn load_scene_str_in(
 fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene, SceneError> {
     bounded(text, origin)?;
     let map = SourceMap::new(text);
-    let ctx = Ctx { origin, map: &map, dir };
+    let ctx = Ctx { origin, map: &map, dir, inputs: Default::default() };
     if crate::space::declared_dimension(text) == 3 {
         return Err(ctx.err(
             "grid.dimension",
@@ -174,6 +176,7 @@ fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene
         file,
         r,
         dir: dir.map(std::path::Path::to_path_buf),
+        inputs: crate::inputs::fingerprints(ctx.inputs.take()),
     })
 }
 

@@ -105,10 +105,12 @@ pub(super) fn cut(profile: &[[f64; 2]], rupture: &[[f64; 2]], cell: f64) -> Opti
 /// `file` relative to the scene's directory.
 pub(super) fn file_path(ctx: &Ctx<'_>, file: &str) -> PathBuf {
     let p = PathBuf::from(file);
-    match ctx.dir {
+    let found = match ctx.dir {
         Some(dir) if p.is_relative() => dir.join(p),
         _ => p,
-    }
+    };
+    ctx.inputs.borrow_mut().push((file.to_string(), found.clone()));
+    found
 }
 
 fn from_file(

@@ -52,7 +52,7 @@ pub(super) fn load_space(
 ) -> Result<SpaceScene, SceneError> {
     super::bounded(text, origin)?;
     let map = SourceMap::new(text);
-    let ctx = Ctx { origin, map: &map, dir };
+    let ctx = Ctx { origin, map: &map, dir, inputs: Default::default() };
     // R3-07: a 3D scene whose dimension was set to anything else (Python's `Scene.set`) would run
     // as 3D under a text that says otherwise, and its run could not be resumed
     let declared = crate::space::declared_dimension(text);
@@ -90,6 +90,7 @@ pub(super) fn load_space(
     })?;
     let mut scene = resolve(&ctx, file, text)?;
     scene.dir = dir.map(std::path::Path::to_path_buf);
+    scene.inputs = crate::inputs::fingerprints(ctx.inputs.take());
     Ok(scene)
 }
 
@@ -147,6 +148,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let runout_direction = runout_direction(ctx, &f, gravity)?;
     Ok(SpaceScene {
         dir: None,
+        inputs: Vec::new(),
         origin: ctx.origin.to_string(),
         text: text.to_string(),
         grid,
