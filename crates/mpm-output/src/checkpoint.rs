@@ -43,7 +43,8 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// run resumed would change its numerics mid-run; 14: the dissipation carries what left through
 /// outflow faces, the energy rows its energy, the solver settings the outflow faces, the solver
 /// state its mass scales, the particles their unwrapped offsets across periodic sides, the
-/// history the watch over the grid's undeclared sides and a 3D run's initial centre of mass).
+/// history the watch over the grid's undeclared sides, a 3D run's initial centre of mass and the
+/// source's top, the file the scene's folder and the fingerprints of the files it read).
 pub const FORMAT: u32 = 14;
 
 /// The checkpoint file name inside an output directory.
@@ -79,14 +80,6 @@ pub struct CheckpointFile {
     pub scene_dir: Option<String>,
     /// the files the scene read, with their fingerprints: a resumed run refuses a changed one.
     pub inputs: Vec<mpm_scene::inputs::InputFile>,
-}
-
-/// `dir` (a scene's directory, `None` for the working directory) as an absolute path, for
-/// [`CheckpointFile::scene_dir`].
-pub fn absolute_dir(dir: Option<&Path>) -> Option<String> {
-    let cwd = std::env::current_dir().ok()?;
-    let d = cwd.join(dir.unwrap_or(Path::new("")));
-    Some(std::fs::canonicalize(&d).unwrap_or(d).display().to_string())
 }
 
 /// writes `c` to `path` atomically, with its header.
@@ -249,6 +242,10 @@ pub struct History {
     /// particles may leave the run through outflow sides.
     #[serde(default)]
     pub initial_centre: Option<[f64; 3]>,
+    /// the highest particle at t = 0 (m; z = 0 in 2D): the source's top for the travel angle,
+    /// kept because particles may leave the run through outflow sides.
+    #[serde(default)]
+    pub crown: Option<[f64; 3]>,
 }
 
 #[cfg(test)]

@@ -277,6 +277,13 @@ impl Driver<'_> {
     ) -> RunoutMetrics {
         let r = self.scene.resolved();
         let f = Flow::unwrapped(r, solver.particles());
+        // every flowing particle has left through outflow sides: the measures stay where they
+        // were last taken
+        if f.mass.is_empty()
+            && let Some(last) = self.history.runout.last()
+        {
+            return RunoutMetrics { time: solver.time(), front_speed: 0.0, ..*last };
+        }
         let column = r.grid.column_width();
         summary::runout(
             solver.time(),
@@ -455,7 +462,7 @@ impl Driver<'_> {
             scene_text: self.scene.text().to_string(),
             state: M::wrap(solver.checkpoint()),
             history: self.history.clone(),
-            scene_dir: crate::run::scene_dir(self.scene.origin(), self.scene.dir()),
+            scene_dir: self.scene.files_dir().map(str::to_string),
             inputs: self.scene.inputs().to_vec(),
         };
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
@@ -517,14 +524,12 @@ impl Driver<'_> {
             runout: RunoutReport {
                 last: h.runout.last().copied().unwrap_or_default(),
                 indicators: {
-                    let f = Flow::of(r, solver.particles());
                     // the source's top: the highest initial particle's top
-                    let crown = f
-                        .initial_position
-                        .iter()
-                        .copied()
-                        .max_by(|a, b| a.y.total_cmp(&b.y))
-                        .map_or(Vector::ZERO, |c| c + Vector::new(0.0, 0.5 * r.spacing));
+                    let top = h.crown.map(|[x, y, _]| Vector::new(x, y)).or_else(|| {
+                        let f = Flow::of(r, solver.particles());
+                        f.initial_position.iter().copied().max_by(|a, b| a.y.total_cmp(&b.y))
+                    });
+                    let crown = top.map_or(Vector::ZERO, |c| c + Vector::new(0.0, 0.5 * r.spacing));
                     let kinetic: Vec<(f64, f64)> =
                         h.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
                     summary::indicators(&h.runout, &kinetic, crown, &r.ground)
@@ -691,6 +696,9 @@ impl<'a> Driver<'a> {
         let m0 = self.metrics(solver);
         self.history.initial = Some(m0);
         self.history.edges = edge_watch(r);
+        let f = Flow::of(r, solver.particles());
+        let top = f.initial_position.iter().copied().max_by(|a, b| a.y.total_cmp(&b.y));
+        self.history.crown = top.map(|c| [c.x, c.y, 0.0]);
         let p = solver.particles();
         self.history.energy_check = Some(EnergyCheck::new(
             &solver.energy(),

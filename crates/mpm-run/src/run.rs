@@ -180,16 +180,6 @@ fn summary_text(dir: &Path) -> Option<String> {
     Some(text)
 }
 
-/// [`CheckpointFile::scene_dir`](checkpoint::CheckpointFile::scene_dir) of a scene from
-/// `origin` whose named files are relative to `dir`: absolute, so that a run resumed from another
-/// working directory finds them (R3-04); `None` for an embedded scene.
-pub(crate) fn scene_dir(origin: &str, dir: Option<&Path>) -> Option<String> {
-    if origin.starts_with("embedded:") {
-        return None;
-    }
-    checkpoint::absolute_dir(dir)
-}
-
 /// the folder of a checkpoint's scene's named files: the absolute one it recorded (R3-04: a
 /// relative path no longer resolved from another working directory), or the scene file's
 /// directory as it was typed.

@@ -55,6 +55,8 @@ pub struct Advance {
     pub time: f64,
     /// steps taken since the start.
     pub steps: u64,
+    /// particles in the run (fewer than at the start once some left through outflow sides).
+    pub particles: usize,
 }
 
 /// The particles' fields, copied (plane strain: 2 components a vector, stresses as xx, yy, zz,
@@ -201,13 +203,14 @@ impl Simulation {
         match self.wait(poll)? {
             Reply::Advanced(r) => match *r {
                 Ok(a) => {
-                    (self.time, self.steps) = (a.time, a.steps);
+                    (self.time, self.steps, self.particles) = (a.time, a.steps, a.particles);
                     Ok(a)
                 }
                 Err(e) => {
                     // the state is the failing step's (its fields and summary show it)
                     if let RunError::Solver { summary, .. } = &e {
-                        (self.time, self.steps) = (summary.simulated_time, summary.steps);
+                        (self.time, self.steps, self.particles) =
+                            (summary.simulated_time, summary.steps, summary.particles);
                     }
                     Err(e)
                 }
@@ -412,7 +415,7 @@ impl Job for Worker {
                         scene_text: scene.text().to_string(),
                         state: M::wrap(solver.checkpoint()),
                         history: history.clone(),
-                        scene_dir: crate::run::scene_dir(scene.origin(), scene.dir()),
+                        scene_dir: scene.files_dir().map(str::to_string),
                         inputs: scene.inputs().to_vec(),
                     },
                 )),
@@ -434,7 +437,8 @@ fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     let result = match limit {
         Limit::Time(t) => solver.run_until(t, driver),
         Limit::Steps(n) => loop {
-            if solver.step_count() - steps0 >= n {
+            // (once every particle has left through outflow sides there is nothing to step)
+            if solver.step_count() - steps0 >= n || solver.particles().is_empty() {
                 break Ok(RunEnd::EndTime);
             }
             match solver.step() {
@@ -470,6 +474,7 @@ fn outcome<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
             stopped: (end == RunEnd::Stopped).then_some(status),
             time: solver.time(),
             steps: solver.step_count(),
+            particles: solver.particles().len(),
         }),
     }
 }

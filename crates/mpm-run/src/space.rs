@@ -321,6 +321,8 @@ struct SpaceDriver<'a> {
     spacing: f64,
     /// the centre of mass at t = 0 (m).
     com0: mpm_solver3d::Vector,
+    /// the highest particle at t = 0 (m).
+    crown: mpm_solver3d::Vector,
     energy: Vec<EnergyRow>,
     runout: Vec<RunoutMetrics>,
     frames: Vec<(f64, String)>,
@@ -368,6 +370,15 @@ impl<'a> SpaceDriver<'a> {
                 p.initial_position.iter().zip(&p.mass).map(|(x, m)| *x * *m).sum::<Vector>() / mass
             }
         };
+        let crown = match history.as_ref().and_then(|h| h.crown) {
+            Some(c) => Vector::from_array(c),
+            None => p
+                .initial_position
+                .iter()
+                .copied()
+                .max_by(|a, b| a.y.total_cmp(&b.y))
+                .unwrap_or(Vector::ZERO),
+        };
         let spacing = g.plan_cell() / scene.gimp_ppc as f64;
         let plan = scene.output.hazard_maps.then(|| {
             let [nx, _, nz] = g.cells();
@@ -409,6 +420,7 @@ impl<'a> SpaceDriver<'a> {
             ground,
             spacing,
             com0,
+            crown,
             energy: Vec::new(),
             runout: Vec::new(),
             frames: Vec::new(),
@@ -491,6 +503,7 @@ impl<'a> SpaceDriver<'a> {
             walls: self.walls.clone(),
             edges: self.edges.clone(),
             initial_centre: Some(self.com0.to_array()),
+            crown: Some(self.crown.to_array()),
         }
     }
 
@@ -507,7 +520,7 @@ impl<'a> SpaceDriver<'a> {
             scene_text: self.scene.text().to_string(),
             state: M::wrap_space(solver.checkpoint()),
             history: self.history(solver.particles().len(), solver.step_count()),
-            scene_dir: crate::run::scene_dir(self.scene.origin(), self.scene.dir()),
+            scene_dir: self.scene.files_dir().map(str::to_string),
             inputs: self.scene.inputs().to_vec(),
         };
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
@@ -547,6 +560,13 @@ impl<'a> SpaceDriver<'a> {
         let p = solver.particles();
         let d = self.scene.runout_direction;
         let keep: Vec<usize> = flowing(self.scene, p).collect();
+        // every flowing particle has left through outflow sides: the measures stay where they
+        // were last taken
+        if keep.is_empty()
+            && let Some(last) = self.runout.last()
+        {
+            return RunoutMetrics { time: solver.time(), front_speed: 0.0, ..*last };
+        }
         let plane = |v: &[mpm_solver3d::Vector]| -> Vec<DVec2> {
             keep.iter().map(|&q| DVec2::new(v[q].dot(d), v[q].y)).collect()
         };
@@ -736,12 +756,8 @@ impl<'a> SpaceDriver<'a> {
         let n = solver.particles().len();
         let p = solver.particles();
         let d = scene.runout_direction;
-        let crown = p
-            .initial_position
-            .iter()
-            .map(|x| DVec2::new(x.dot(d), x.y))
-            .max_by(|a, b| a.y.total_cmp(&b.y))
-            .map_or(DVec2::ZERO, |c| c + DVec2::new(0.0, 0.5 * self.spacing));
+        let crown =
+            DVec2::new(self.crown.dot(d), self.crown.y) + DVec2::new(0.0, 0.5 * self.spacing);
         let kinetic: Vec<(f64, f64)> =
             self.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
         let mut check = self.check;

@@ -32,6 +32,17 @@ pub(crate) fn fingerprints(files: Vec<(String, std::path::PathBuf)>) -> Vec<Inpu
     out
 }
 
+/// the folder a scene's named files are found in, `dir` (`None`: the working directory) made
+/// absolute against the working directory now, when the scene is loaded (R3-04: a run resumed
+/// from another working directory did not find its DEM); `None` for an embedded scene.
+pub(crate) fn absolute_dir(origin: &str, dir: Option<&std::path::Path>) -> Option<String> {
+    if origin.starts_with("embedded:") {
+        return None;
+    }
+    let d = std::env::current_dir().ok()?.join(dir.unwrap_or(std::path::Path::new("")));
+    Some(std::fs::canonicalize(&d).unwrap_or(d).display().to_string())
+}
+
 /// FNV-1a of the file's bytes.
 fn fingerprint(path: &std::path::Path) -> Option<String> {
     let bytes = std::fs::read(path).ok()?;

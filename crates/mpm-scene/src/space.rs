@@ -21,6 +21,9 @@ pub struct SpaceScene {
     pub(crate) dir: Option<std::path::PathBuf>,
     /// the files it read, with their contents' fingerprints.
     pub(crate) inputs: Vec<crate::inputs::InputFile>,
+    /// the folder its named files were found in, absolute as the scene was loaded (`None` for
+    /// an embedded scene).
+    pub(crate) files_dir: Option<String>,
     pub(crate) origin: String,
     pub(crate) text: String,
     pub(crate) file: SpaceFile,
@@ -186,9 +189,10 @@ impl SpaceScene {
         &self.inputs
     }
 
-    /// the directory its named files are relative to (`None`: the working directory).
-    pub fn dir(&self) -> Option<&std::path::Path> {
-        self.dir.as_deref()
+    /// the folder its named files were found in, absolute as the scene was loaded (`None` for
+    /// an embedded scene): what a checkpoint records for `mpm resume`.
+    pub fn files_dir(&self) -> Option<&str> {
+        self.files_dir.as_deref()
     }
 
     /// the scene's text.

@@ -121,9 +121,10 @@ pub struct Outflowed {
 /// `scale(t) = KE₀ + U₀ + Σ_p m_p |g| h_p + released(t)`:
 /// the initial kinetic and strain energy, the potential energy of every particle above the
 /// ground below it at the start (h_p ≥ 0, full gravity), and the largest energy the motion has
-/// released so far, max over time of (P₀ − (P(t) − W_ext(t))): the drop of potential energy
-/// not counting what a gravity ramp booked as external work (which depends on where the origin
-/// is, not on the motion). The relative residual `residual / scale` is 0 for a
+/// released so far, max over time of (P₀ − (P(t) + O(t) − W_ext(t))): the drop of potential
+/// energy not counting what a gravity ramp booked as external work (which depends on where the
+/// origin is, not on the motion), nor the energy O(t) that particles carried out through outflow
+/// sides (their potential would otherwise count as released, by their height above the origin). The relative residual `residual / scale` is 0 for a
 /// perfect integrator, positive when the integration creates energy and negative when it loses
 /// energy it does not book as dissipation (a body crushed into the floor, a collapse that a
 /// contact law absorbs without friction work).
@@ -163,7 +164,10 @@ impl EnergyCheck {
 
     /// the scale of `e` (see the type's docs), after taking its potential energy into account.
     fn scale(&mut self, e: &EnergyLedger) -> Real {
-        self.released = self.released.max(self.initial_potential - (e.potential - e.external_work));
+        // (what left through outflow sides counts with the potential: else each particle that
+        // leaves would "release" its height above the origin)
+        let potential = e.potential + e.outflow;
+        self.released = self.released.max(self.initial_potential - (potential - e.external_work));
         self.initial_scale + self.released
     }
 

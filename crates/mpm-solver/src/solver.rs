@@ -174,6 +174,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         if let Some(bad) =
             [d.plastic, d.friction, d.constraint, d.external, d.transfer, d.side_walls]
                 .into_iter()
+                .chain([d.outflow.energy, d.outflow.mass, d.outflow.momentum.length()])
                 .find(|e| !e.is_finite())
                 .or(Some(checkpoint.initial_stored).filter(|e| e.is_infinite()))
         {

@@ -177,6 +177,7 @@ fn load(text: &str, origin: &str, dir: Option<&std::path::Path>) -> Result<Scene
         r,
         dir: dir.map(std::path::Path::to_path_buf),
         inputs: crate::inputs::fingerprints(ctx.inputs.take()),
+        files_dir: crate::inputs::absolute_dir(origin, dir),
     })
 }
 

@@ -91,6 +91,7 @@ pub(super) fn load_space(
     let mut scene = resolve(&ctx, file, text)?;
     scene.dir = dir.map(std::path::Path::to_path_buf);
     scene.inputs = crate::inputs::fingerprints(ctx.inputs.take());
+    scene.files_dir = crate::inputs::absolute_dir(origin, dir);
     Ok(scene)
 }
 
@@ -149,6 +150,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     Ok(SpaceScene {
         dir: None,
         inputs: Vec::new(),
+        files_dir: None,
         origin: ctx.origin.to_string(),
         text: text.to_string(),
         grid,

@@ -57,6 +57,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         self.scratch.stencils_ahead = None;
         let own = self.config.gravity_ramp;
         self.config.gravity_ramp = ramp;
+        // nothing leaves while the material settles (its arrays are given back whole below);
+        // a particle beyond an outflow side leaves at the run's first step
+        let outflow = std::mem::take(&mut self.config.outflow);
         let end = match self.interrupt.clone() {
             // stopped between steps by the flag (`Solver::set_interrupt`)
             Some(flag) => self.run_until(ramp + hold, &mut Interrupt(flag)).and_then(|e| match e {
@@ -68,6 +71,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             None => self.run_until(ramp + hold, &mut ()),
         };
         self.config.gravity_ramp = own;
+        self.config.outflow = outflow;
         if let Err(e) = end {
             *self.particles_mut() = given;
             self.restart_clock();
@@ -80,6 +84,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         p.velocity = declared;
         p.affine = declared_affine;
         p.initial_position.clone_from(&p.position);
+        // (the run measures its travel from the settled positions, wrapped into the strip)
+        p.unwrap.iter_mut().for_each(|u| *u = 0.0);
         self.restart_clock();
         Ok(report)
     }
