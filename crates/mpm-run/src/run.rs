@@ -104,6 +104,8 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
                     state,
                     apic,
                 ) as usize
+                    // a checkpoint's two copies of the particles
+                    + 2 * r.seeds.len() * mpm_scene::checkpoint_copy(state, apic)
                     + match r.initial_state {
                         mpm_scene::InitialState::Implicit(_) => {
                             mpm_solver::geostatic::estimated_bytes(r.seeds.len(), N) as usize

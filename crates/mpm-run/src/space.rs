@@ -132,7 +132,6 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
             }
             let o = &scene.output;
             let frames = if o.vtk { (scene.end_time / o.interval).ceil() as u64 + 1 } else { 0 };
-            let apic = scene.config.transfer == mpm_solver3d::Transfer::Apic;
             let n = scene.seeds.len();
             Ok(CheckReport {
                 particles: n,
@@ -141,13 +140,8 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
                 initial_dt: scene.initial_dt,
                 estimated_steps: (scene.end_time / scene.initial_dt).ceil() as u64,
                 initial_state_steps: None,
-                memory_bytes: mpm_solver3d::estimated_bytes(
-                    n,
-                    active.len(),
-                    N,
-                    size_of::<M::State>(),
-                    apic,
-                ) as usize,
+                // (the run's peak: the solver, the seeds, a checkpoint's copies, a frame)
+                memory_bytes: scene.peak_bytes(size_of::<M::State>()) as usize,
                 frames,
                 frame_bytes: frames * o.vtk_format.frame_bytes(n, &o.fields),
             })

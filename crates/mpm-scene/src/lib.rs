@@ -67,7 +67,9 @@ pub use summary::{
     RunoutMetrics, RunoutReport,
 };
 pub use validate::plausible::WARNINGS;
-pub use validate::{load_scene_str, load_scene_str_in, load_space_str, load_space_str_in};
+pub use validate::{
+    checkpoint_copy, load_scene_str, load_scene_str_in, load_space_str, load_space_str_in,
+};
 
 /// Reads and validates the scene file at `path` (an I/O error is reported as a [`SceneError`]
 /// for the file). Files above [`limits::MAX_SCENE_BYTES`] and files that are not UTF-8 text are

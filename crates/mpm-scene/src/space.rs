@@ -184,6 +184,22 @@ impl SpaceScene {
         &self.origin
     }
 
+    /// the memory its run peaks at (bytes) for a constitutive state of `state` bytes a particle:
+    /// what a scene is refused for when it does not fit, and what `mpm check` reports.
+    pub fn peak_bytes(&self, state: usize) -> u64 {
+        let o = &self.output;
+        let frame = if o.vtk { o.vtk_format.frame_bytes(self.seeds.len(), &o.fields) } else { 0 };
+        let apic = self.config.transfer == mpm_solver3d::Transfer::Apic;
+        crate::validate::space::peak_bytes(
+            self.seeds.len(),
+            &self.grid,
+            self.shape_function,
+            state,
+            apic,
+            frame,
+        )
+    }
+
     /// the files the scene read (the DEM, rasters), with their fingerprints.
     pub fn inputs(&self) -> &[crate::inputs::InputFile] {
         &self.inputs

@@ -348,3 +348,61 @@ fn the_implicit_solve_is_in_the_memory_check() {
     assert_eq!(code, Some(0), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// R3-02: a 3D scene whose run needs more memory than the process may use is refused before the
+/// solver allocates anything (exit 2, naming the need and the limit), where it used to abort
+/// (SIGABRT, 134) under `ulimit -v` and run past `MPM_MEMORY_LIMIT`. A 0.15 m sand cylinder at
+/// 16 × 16 × 16 particles per 5 cm cell: 694 272 particles, about 690 B each at the run's peak
+/// (the solver's 290 B, the seeds, a checkpoint's two copies), so about 480 MB against a limit
+/// of 300 MB; `mpm check` reports the same peak.
+#[test]
+fn a_3d_scene_beyond_the_memory_limit_is_refused_before_it_runs() {
+    let dir = temp_dir("memory3d");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("cylinder.toml");
+    std::fs::write(
+        &file,
+        r#"
+[grid]
+dimension = 3
+kind = "regular"
+origin = [0.0, 0.0, 0.0]
+cell = [0.05, 0.05, 0.05]
+cells = [24, 10, 24]
+[materials.sand]
+kind = "drucker_prager"
+young = 2.0e6
+poisson = 0.3
+density = 1600.0
+cohesion = 0.0
+friction_angle_deg = 30.0
+cone_match = "outer"
+[[bodies]]
+material = "sand"
+shape = "cylinder"
+base = [0.6, 0.0, 0.6]
+radius = 0.15
+height = 0.3
+particles_per_cell = 16
+[boundaries]
+ground = "rough"
+[solver]
+end_time = 0.0005
+"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(["run", file.to_str().unwrap(), "--out", dir.join("o").to_str().unwrap()])
+        .env("MPM_MEMORY_LIMIT", "300M")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("(MPM_MEMORY_LIMIT)") && err.contains("particles ("), "{err}");
+    assert!(!dir.join("o").exists());
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_mpm")).args(["check", file.to_str().unwrap()]).output();
+    let text = String::from_utf8_lossy(&out.unwrap().stdout).into_owned();
+    eprintln!("{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

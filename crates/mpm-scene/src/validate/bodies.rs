@@ -479,10 +479,22 @@ fn shape_name(k: ShapeKind) -> &'static str {
     }
 }
 
+/// the bytes a particle's state takes in a copy of the particles (a checkpoint, or the final state
+/// hash, holds two: the copy and its encoding; R3-02 measured them in 3D).
+pub fn checkpoint_copy(state: usize, apic: bool) -> usize {
+    use mpm_solver::{Matrix, Stress, Vector};
+    3 * size_of::<Vector>()
+        + 2 * size_of::<f64>()
+        + size_of::<Stress>()
+        + state
+        + 2 * size_of::<u16>()
+        + if apic { size_of::<Matrix>() } else { 0 }
+}
+
 /// refuses a scene whose particles would not fit in the memory this process may use, before any
 /// particle exists: the count comes from the bodies' areas (n² particles per cell), the bytes per
 /// particle from the solver's own accounting (`mpm_solver::estimated_bytes`), plus the scene's
-/// seeds and one particle frame being written.
+/// seeds, a checkpoint's two copies of the particles and one particle frame being written.
 fn fits_in_memory(
     ctx: &Ctx<'_>,
     f: &SceneFile,
@@ -520,7 +532,7 @@ fn fits_in_memory(
     let solve = if implicit { mpm_solver::geostatic::estimated_bytes(n, stencil) } else { 0 };
     let need =
         mpm_solver::estimated_bytes(n, nodes.min(n.saturating_mul(stencil)), stencil, state, apic)
-            + (n * std::mem::size_of::<Seed>()) as u64
+            + (n * (std::mem::size_of::<Seed>() + 2 * checkpoint_copy(state, apic))) as u64
             + frame
             + solve;
     let Some((available, source)) = crate::limits::available_memory() else { return Ok(()) };
@@ -529,8 +541,9 @@ fn fits_in_memory(
             "bodies",
             None,
             format!(
-                "the scene needs about {:.0} MB for {n} particles ({:.0} B each, with the grid \
-                 and one frame being written{}), but only {:.0} MB are available ({source})",
+                "the scene needs about {:.0} MB for {n} particles ({:.0} B each, with the grid, \
+                 a checkpoint and one frame being written{}), but only {:.0} MB are available \
+                 ({source})",
                 need as f64 / 1e6,
                 need as f64 / n.max(1) as f64,
                 if implicit {

@@ -22,6 +22,7 @@ mod polyline;
 mod solver;
 pub(super) mod space;
 
+pub use bodies::checkpoint_copy;
 pub use space::{load_space_str, load_space_str_in};
 
 use crate::error::SceneError;

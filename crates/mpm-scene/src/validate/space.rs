@@ -128,6 +128,7 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
     let (materials, used) = materials::select(ctx, &f.materials, &names, &built)?;
     let (seeds, gimp_ppc) = seeds(ctx, &f, (&grid, surface.as_ref()), &used)?;
     let config = config(ctx, &f, &grid, &settings, gravity, &materials)?;
+    fits_in_memory(ctx, &f, &grid, seeds.len(), shape_function, materials.state_bytes())?;
     for (k, w) in config.walls.iter().enumerate() {
         if let Some(s) = seeds.iter().find(|s| w.contains(s.position)) {
             return Err(ctx.err(
@@ -973,6 +974,78 @@ fn release_body(
         return Err(bodies::too_many(ctx, base));
     }
     Ok(fill)
+}
+
+/// The memory a 3D run of `n` particles peaks at (bytes): the solver's own accounting
+/// (`mpm_solver3d::estimated_bytes`, with every grid node active or `stencil` nodes per particle,
+/// whichever is fewer), the scene's seeds, two more copies of the particles' state while a
+/// checkpoint or the final state hash is taken (the copy and its encoding), and one frame being
+/// written. R3-02: the solver's figure alone was 204 MB where the run peaked at 450 MB.
+pub(crate) fn peak_bytes(
+    n: usize,
+    grid: &SpaceGrid,
+    shape_function: ShapeFunctionKind,
+    state: usize,
+    apic: bool,
+    frame: u64,
+) -> u64 {
+    let stencil = if shape_function == ShapeFunctionKind::Bilinear { 8 } else { 27 };
+    let [nx, ny, nz] = grid.cells();
+    let nodes = (nx + 3).saturating_mul(ny + 3).saturating_mul(nz + 3);
+    let solver = mpm_solver3d::estimated_bytes(
+        n,
+        nodes.min(n.saturating_mul(stencil)),
+        stencil,
+        state,
+        apic,
+    );
+    // (a copy of one particle's state, as `bodies::checkpoint_copy` counts it in 2D)
+    let copy = 3 * size_of::<Vector>()
+        + 2 * size_of::<f64>()
+        + size_of::<mpm_solver3d::Stress>()
+        + state
+        + 2 * size_of::<u16>()
+        + if apic { size_of::<mpm_solver3d::Matrix>() } else { 0 };
+    solver + (n * (size_of::<SpaceSeed>() + 2 * copy)) as u64 + frame
+}
+
+/// refuses a 3D scene whose run would not fit in the memory this process may use, before the
+/// solver allocates anything (R3-02: it aborted with SIGABRT under `ulimit -v`, and ran past
+/// `MPM_MEMORY_LIMIT`).
+fn fits_in_memory(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    grid: &SpaceGrid,
+    n: usize,
+    shape_function: ShapeFunctionKind,
+    state: usize,
+) -> Result<(), SceneError> {
+    let Some((available, source)) = crate::limits::available_memory() else { return Ok(()) };
+    let apic = f.solver.transfer == Some(mpm_solver::Transfer::Apic);
+    let frame = if f.output.vtk.unwrap_or(true) {
+        let fields = f.output.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec());
+        f.output.vtk_format.unwrap_or_default().frame_bytes(n, &fields)
+    } else {
+        0
+    };
+    let need = peak_bytes(n, grid, shape_function, state, apic, frame);
+    if need <= available {
+        return Ok(());
+    }
+    Err(ctx.err(
+        "bodies",
+        None,
+        format!(
+            "the scene needs about {:.0} MB for {n} particles ({:.0} B each, with the grid, a \
+             checkpoint and one frame being written), but only {:.0} MB are available ({source})",
+            need as f64 / 1e6,
+            need as f64 / n.max(1) as f64,
+            available as f64 / 1e6
+        ),
+        format!("at most about {:.0} MB", available as f64 / 1e6),
+        "use a coarser grid, fewer particles per cell or smaller bodies, or run it on a machine \
+         with more memory",
+    ))
 }
 
 /// the friction law of a face, if the scene names one.
