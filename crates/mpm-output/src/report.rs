@@ -268,12 +268,14 @@ fn final_deposit(plot_dir: &Path, scene: &Scene, deposit: &Deposit<'_>) -> Resul
 }
 
 /// `envelope.png`: along the path, the ground with the highest flow surface and the final
-/// deposit above it, then the three maxima: flow thickness, speed (depth-averaged and of a
-/// particle) and impact pressure.
+/// deposit above it (and, at x of each of `edges`, the ends of the grid the scene left
+/// undeclared that the flow reached, as a thick vertical line), then the three maxima: flow
+/// thickness, speed (depth-averaged and of a particle) and impact pressure.
 pub fn envelope(
     plot_dir: &Path,
     e: &Envelope,
     deposit: &[(f64, f64, f64)],
+    edges: &[f64],
 ) -> Result<(), OutputError> {
     let along = |f: &dyn Fn(&envelope::Station) -> f64| -> Vec<(f64, f64)> {
         e.stations.iter().filter(|s| s.arrival.is_some()).map(|s| (s.x, f(s))).collect()
@@ -281,7 +283,10 @@ pub fn envelope(
     let series =
         |name: &str, points, style, color| Series { name: name.into(), points, style, color };
     let ground: Vec<(f64, f64)> = e.stations.iter().map(|s| (s.x, s.ground)).collect();
-    let profile = [
+    let (low, high) = e.stations.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+        (a.min(s.ground), b.max(s.ground + s.max_thickness))
+    });
+    let mut profile = vec![
         series("ground", ground, Style::Thick, 6),
         series("ground + max thickness", along(&|s| s.ground + s.max_thickness), Style::Line, 1),
         series(
@@ -291,6 +296,9 @@ pub fn envelope(
             0,
         ),
     ];
+    for &x in edges.iter().filter(|_| low <= high) {
+        profile.push(series("grid edge reached", vec![(x, low), (x, high)], Style::Thick, 3));
+    }
     let thickness = [series("max thickness", along(&|s| s.max_thickness), Style::Line, 1)];
     let speed = [
         series("depth-averaged", along(&|s| s.max_mean_speed), Style::Line, 0),

@@ -576,7 +576,11 @@ impl Driver<'_> {
             atomic::write(&dir.join("section.geojson"), section_geojson(line).as_bytes())?;
         }
         if r.output.plots {
-            report::envelope(&dir.join("plots"), e, &deposit)?;
+            // the undeclared ends of the grid the flow reached
+            let edges: Vec<f64> = self.history.edges.as_ref().map_or_else(Vec::new, |w| {
+                w.faces.iter().filter(|f| f.first_time.is_some()).map(|f| f.at).collect()
+            });
+            report::envelope(&dir.join("plots"), e, &deposit, &edges)?;
         }
         Ok(())
     }
