@@ -74,6 +74,9 @@ pub(crate) struct Driver<'a> {
     stop: Option<Stop>,
     /// the kinetic energy's course for `stop_at_rest`, kept as the rows come.
     rest: RestWatch,
+    /// particle-steps of this session not yet in the history: the particles of each step
+    /// (fewer once some left through outflow sides).
+    pub(crate) session_particle_steps: f64,
 }
 
 /// The peak of the kinetic energy over the series rows so far, and the time of the first row of
@@ -612,6 +615,7 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         if h.dt_first == 0.0 {
             h.dt_first = report.dt;
         }
+        self.session_particle_steps += solver.particles().len() as f64;
         if let Some(e) = &mut h.envelope {
             observe(e, r, solver);
         }
@@ -681,6 +685,7 @@ impl<'a> Driver<'a> {
             io_error: None,
             stop: None,
             rest,
+            session_particle_steps: 0.0,
         }
     }
 

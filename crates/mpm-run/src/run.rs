@@ -438,7 +438,6 @@ impl Job for RunJob<'_> {
         } else {
             driver.rewrite_outputs()?;
         }
-        let session_steps0 = solver.step_count();
         let start = Instant::now();
         // An error of the initial state's explicit ramp names a step of the ramp, not of the run.
         let during_ramp =
@@ -458,8 +457,7 @@ impl Job for RunJob<'_> {
         let elapsed = start.elapsed().as_secs_f64();
         driver.progress.finish();
         driver.history.wall_time += elapsed;
-        driver.history.particle_steps +=
-            (solver.step_count() - session_steps0) as f64 * solver.particles().len() as f64;
+        driver.history.particle_steps += std::mem::take(&mut driver.session_particle_steps);
         if let Some(e) = driver.io_error.take() {
             return Err(e);
         }

@@ -452,8 +452,7 @@ fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         },
     };
     driver.history.wall_time += start.elapsed().as_secs_f64();
-    driver.history.particle_steps +=
-        (solver.step_count() - steps0) as f64 * solver.particles().len() as f64;
+    driver.history.particle_steps += std::mem::take(&mut driver.session_particle_steps);
     result
 }
 

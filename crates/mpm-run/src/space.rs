@@ -300,6 +300,9 @@ struct SpaceDriver<'a> {
     edges: Option<EdgeWatch>,
     /// when this session started, and at which step.
     session: (Instant, u64),
+    /// particle-steps of this session: the particles of each step (fewer once some left through
+    /// outflow sides).
+    session_particle_steps: f64,
     /// wall time (s) and particle-steps of earlier sessions (a resumed run's).
     earlier: (f64, f64),
     checkpoint_slot: u64,
@@ -403,6 +406,7 @@ impl<'a> SpaceDriver<'a> {
             scene,
             plan,
             session: (Instant::now(), solver.step_count()),
+            session_particle_steps: 0.0,
             earlier: (0.0, 0.0),
             checkpoint_slot: 0,
             dir,
@@ -466,8 +470,8 @@ impl<'a> SpaceDriver<'a> {
     }
 
     /// the output history as a resumed run needs it, at this step.
-    fn history(&self, particles: usize, step: u64) -> History {
-        let (start, step0) = self.session;
+    fn history(&self) -> History {
+        let (start, _) = self.session;
         let c = &self.check;
         History {
             energy: self.energy.clone(),
@@ -481,7 +485,7 @@ impl<'a> SpaceDriver<'a> {
             dt_max: self.dt.max,
             dt_first: self.dt.first,
             wall_time: self.earlier.0 + start.elapsed().as_secs_f64(),
-            particle_steps: self.earlier.1 + (step - step0) as f64 * particles as f64,
+            particle_steps: self.earlier.1 + self.session_particle_steps,
             output_time: self.output_time,
             initial: self.runout.first().copied(),
             energy_check: Some(mpm_solver::EnergyCheck {
@@ -513,7 +517,7 @@ impl<'a> SpaceDriver<'a> {
             origin: self.scene.origin().to_string(),
             scene_text: self.scene.text().to_string(),
             state: M::wrap_space(solver.checkpoint()),
-            history: self.history(solver.particles().len(), solver.step_count()),
+            history: self.history(),
             scene_dir: self.scene.files_dir().map(str::to_string),
             inputs: self.scene.inputs().to_vec(),
         };
@@ -756,7 +760,7 @@ impl<'a> SpaceDriver<'a> {
             self.energy.iter().map(|e| (e.time, e.ledger.kinetic)).collect();
         let mut check = self.check;
         let wall = self.earlier.0 + self.wall_time;
-        let particle_steps = self.earlier.1 + (steps - self.session.1) as f64 * n as f64;
+        let particle_steps = self.earlier.1 + self.session_particle_steps;
         let gone = solver.outflowed();
         let edges = self.edges.as_ref().map_or_else(Vec::new, |w| {
             w.reached(flowing(scene, p).map(|q| p.mass[q]).sum::<f64>() + gone.mass)
@@ -910,6 +914,7 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
         if self.dt.first == 0.0 {
             self.dt.first = report.dt;
         }
+        self.session_particle_steps += solver.particles().len() as f64;
         let t = report.time;
         if let Some(e) = &mut self.plan {
             observe(e, scene, self.spacing, solver);

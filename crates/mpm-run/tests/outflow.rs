@@ -76,6 +76,11 @@ fn a_block_slides_off_an_outflow_side_in_2d_and_the_open_side_it_started_at_is_r
     assert_eq!(edges, ["left_wall"], "{:?}", s.edges);
     assert_eq!(s.edges[0].first_time, 0.0);
     assert!(s.warnings.iter().any(|w| w.contains("`left_wall`")), "{:?}", s.warnings);
+    // the throughput counts each step's particles: 72 until the first leaves at 0.8 s of 1.0,
+    // none after the last (the run's 72 × steps would overstate it)
+    let particle_steps = s.particle_steps_per_s * s.wall_time_s;
+    let full = 72.0 * s.steps as f64;
+    assert!((0.8 * full..0.99 * full).contains(&particle_steps), "{particle_steps} of {full}");
     let csv = std::fs::read_to_string(d.join("energy.csv")).unwrap();
     assert!(csv.lines().next().unwrap().ends_with(",outflow"));
     let last: f64 = csv.lines().last().unwrap().rsplit(',').next().unwrap().parse().unwrap();
