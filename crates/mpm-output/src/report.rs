@@ -106,14 +106,21 @@ fn energy(plot_dir: &Path, rows: &[EnergyRow], unit: &str) -> Result<(), OutputE
             size: (900, 560),
             equal_aspect: false,
         },
-        &[
-            line("kinetic", 0, &|r| r.ledger.kinetic),
-            line("strain", 2, &|r| r.ledger.strain),
-            line("potential − initial", 4, &|r| r.ledger.potential - e0),
-            line("dissipated", 1, &|r| r.ledger.dissipated()),
-            line("external work", 5, &|r| r.ledger.external_work),
-            line("residual (error)", 6, &|r| r.ledger.residual),
-        ],
+        &{
+            let mut lines = vec![
+                line("kinetic", 0, &|r| r.ledger.kinetic),
+                line("strain", 2, &|r| r.ledger.strain),
+                line("potential − initial", 4, &|r| r.ledger.potential - e0),
+                line("dissipated", 1, &|r| r.ledger.dissipated()),
+                line("external work", 5, &|r| r.ledger.external_work),
+                line("residual (error)", 6, &|r| r.ledger.residual),
+            ];
+            // what left through outflow sides (its potential leaves "potential − initial" too)
+            if rows.iter().any(|r| r.ledger.outflow != 0.0) {
+                lines.push(line("carried out (outflow)", 3, &|r| r.ledger.outflow));
+            }
+            lines
+        },
     )?;
     Ok(())
 }

@@ -183,11 +183,12 @@ fn summary_text(dir: &Path) -> Option<String> {
 }
 
 /// the folder of a checkpoint's scene's named files: the absolute one it recorded (R3-04: a
-/// relative path no longer resolved from another working directory), or the scene file's
-/// directory as it was typed.
+/// relative path no longer resolved from another working directory) while it exists, else (a
+/// project folder moved or mounted elsewhere) the scene file's directory as it was typed; the
+/// files' fingerprints still refuse other files.
 pub(crate) fn files_dir(c: &checkpoint::CheckpointFile) -> Option<std::path::PathBuf> {
-    if let Some(d) = &c.scene_dir {
-        return Some(std::path::PathBuf::from(d));
+    if let Some(d) = c.scene_dir.as_ref().map(std::path::PathBuf::from).filter(|d| d.is_dir()) {
+        return Some(d);
     }
     if c.origin.starts_with("embedded:") {
         return None;

@@ -45,7 +45,6 @@ end_time = 1.2
 [output]
 interval = 0.3
 vtk = false
-plots = false
 "#
     )
 }
@@ -85,6 +84,8 @@ fn a_block_slides_off_an_outflow_side_in_2d_and_the_open_side_it_started_at_is_r
     assert!(csv.lines().next().unwrap().ends_with(",outflow"));
     let last: f64 = csv.lines().last().unwrap().rsplit(',').next().unwrap().parse().unwrap();
     assert_eq!(last, s.energy.outflow);
+    // (the energy plot draws what was carried out)
+    assert!(std::fs::metadata(d.join("plots/energy.png")).is_ok_and(|m| m.len() > 0));
     let _ = std::fs::remove_dir_all(&d);
 }
 

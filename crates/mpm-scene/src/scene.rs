@@ -284,6 +284,12 @@ impl Scene {
         self.files_dir.as_deref()
     }
 
+    /// where an edited copy of the scene finds its named files: the folder they were found in
+    /// as it was loaded (a later change of working directory does not move them).
+    pub(crate) fn files_base(&self) -> Option<&std::path::Path> {
+        self.files_dir.as_deref().map(std::path::Path::new).or(self.dir.as_deref())
+    }
+
     /// the scene's text.
     pub fn text(&self) -> &str {
         &self.text

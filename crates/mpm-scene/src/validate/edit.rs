@@ -61,7 +61,7 @@ impl Scene {
     pub fn with_value(&self, path: &str, value: &str) -> Result<Scene, SceneError> {
         let text = edited(&self.text, &self.origin, path, value)?;
         let origin = format!("{} (with {path} = {value})", self.origin);
-        load(&text, &origin, self.dir.as_deref()).map(|mut scene| {
+        load(&text, &origin, self.files_base()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })
@@ -74,7 +74,7 @@ impl SpaceScene {
     pub fn with_value(&self, path: &str, value: &str) -> Result<SpaceScene, SceneError> {
         let text = edited(&self.text, &self.origin, path, value)?;
         let origin = format!("{} (with {path} = {value})", self.origin);
-        load_space(&text, &origin, self.dir.as_deref()).map(|mut scene| {
+        load_space(&text, &origin, self.files_base()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })

@@ -198,7 +198,7 @@ impl Scene {
             admissible: String::new(),
             fix: "use finite values".into(),
         })?;
-        load(&text, &format!("{} (modified)", self.origin), self.dir.as_deref())
+        load(&text, &format!("{} (modified)", self.origin), self.files_base())
     }
 }
 
