@@ -124,10 +124,10 @@ pub struct Outflowed {
 /// released so far, max over time of (P₀ − (P(t) + O(t) − W_ext(t))): the drop of potential
 /// energy not counting what a gravity ramp booked as external work (which depends on where the
 /// origin is, not on the motion), nor the energy O(t) that particles carried out through outflow
-/// sides (their potential would otherwise count as released, by their height above the origin). The relative residual `residual / scale` is 0 for a
-/// perfect integrator, positive when the integration creates energy and negative when it loses
-/// energy it does not book as dissipation (a body crushed into the floor, a collapse that a
-/// contact law absorbs without friction work).
+/// sides (their potential would otherwise count as released, by their height above the origin).
+/// The relative residual `residual / scale` is 0 for a perfect integrator, positive when the
+/// integration creates energy and negative when it loses energy it does not book as dissipation
+/// (a body crushed into the floor, a collapse that a contact law absorbs without friction work).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EnergyCheck {
     /// KE₀ + U₀ + Σ m_p |g| h_p (J/m).

@@ -168,12 +168,12 @@ impl<S> Particles<S> {
         self.mass.iter().zip(&self.velocity).map(|(&m, &v)| m * v).sum()
     }
 
-    /// keeps the particles for which `keep(p)` is true, in their order, in every array (and in
+    /// keeps the particles p whose `keep[p]` is true, in their order, in every array (and in
     /// `extra`, an array of the caller's with one entry per particle, or empty); returns how many
-    /// were removed.
-    pub fn retain<T>(&mut self, keep: impl Fn(usize) -> bool, extra: &mut Vec<T>) -> usize {
+    /// were removed. A `keep` of another length than the particles' changes nothing.
+    pub fn retain<T>(&mut self, keep: &[bool], extra: &mut Vec<T>) -> usize {
         let n = self.len();
-        let mask: Vec<bool> = (0..n).map(keep).collect();
+        let mask = keep;
         fn filter<T>(v: &mut Vec<T>, mask: &[bool]) {
             if v.len() == mask.len() {
                 let mut k = 0;
@@ -183,18 +183,18 @@ impl<S> Particles<S> {
                 });
             }
         }
-        filter(&mut self.position, &mask);
-        filter(&mut self.velocity, &mask);
-        filter(&mut self.mass, &mask);
-        filter(&mut self.volume, &mask);
-        filter(&mut self.stress, &mask);
-        filter(&mut self.state, &mask);
-        filter(&mut self.material, &mask);
-        filter(&mut self.body, &mask);
-        filter(&mut self.initial_position, &mask);
-        filter(&mut self.affine, &mask);
-        filter(&mut self.unwrap, &mask);
-        filter(extra, &mask);
+        filter(&mut self.position, mask);
+        filter(&mut self.velocity, mask);
+        filter(&mut self.mass, mask);
+        filter(&mut self.volume, mask);
+        filter(&mut self.stress, mask);
+        filter(&mut self.state, mask);
+        filter(&mut self.material, mask);
+        filter(&mut self.body, mask);
+        filter(&mut self.initial_position, mask);
+        filter(&mut self.affine, mask);
+        filter(&mut self.unwrap, mask);
+        filter(extra, mask);
         n - self.len()
     }
 

@@ -438,17 +438,31 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             + self.scratch.heap_bytes()
     }
 
+    /// particle `i`'s kinetic energy ½ m_p |v_p|².
+    fn kinetic_of(&self, i: usize) -> Real {
+        let p = &self.particles;
+        0.5 * p.mass[i] * p.velocity[i].length_squared()
+    }
+
+    /// particle `i`'s elastic strain energy V_p ½ σ_p : C⁻¹ : σ_p (its model's).
+    fn strain_of(&self, i: usize) -> Real {
+        let p = &self.particles;
+        let m = &self.materials[usize::from(p.material[i])];
+        p.volume[i] * m.stored_energy_density(&crate::math::full_stress(&p.stress[i]), &p.state[i])
+    }
+
+    /// particle `i`'s potential energy −m_p g·x_p under gravity `g`.
+    fn potential_of(&self, i: usize, g: Vector) -> Real {
+        -self.particles.mass[i] * g.dot(self.particles.position[i])
+    }
+
     /// the energy ledger now (SPEC §5). Costs one pass over the particles.
     pub fn energy(&self) -> EnergyLedger {
         let p = &self.particles;
         let g = self.config.gravity_at(self.time);
-        let kinetic = par::sum(p.len(), |i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
-        let strain = par::sum(p.len(), |i| {
-            let m = &self.materials[usize::from(p.material[i])];
-            p.volume[i]
-                * m.stored_energy_density(&crate::math::full_stress(&p.stress[i]), &p.state[i])
-        });
-        let potential = par::sum(p.len(), |i| -p.mass[i] * g.dot(p.position[i]));
+        let kinetic = par::sum(p.len(), |i| self.kinetic_of(i));
+        let strain = par::sum(p.len(), |i| self.strain_of(i));
+        let potential = par::sum(p.len(), |i| self.potential_of(i, g));
         let mut e = EnergyLedger {
             kinetic,
             strain,
@@ -646,19 +660,17 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         }
         let leaving: Vec<bool> = p.position.iter().map(|&x| outflow.has_left(x)).collect();
         let g = self.config.gravity_at(self.time);
-        let gone = &mut self.dissipation.outflow;
+        let mut gone = self.dissipation.outflow;
         for i in (0..p.len()).filter(|&i| leaving[i]) {
-            let m = &self.materials[usize::from(p.material[i])];
-            let stress = crate::math::full_stress(&p.stress[i]);
             gone.particles += 1;
             gone.mass += p.mass[i];
             gone.momentum += p.mass[i] * p.velocity[i];
-            gone.energy += 0.5 * p.mass[i] * p.velocity[i].length_squared()
-                + p.volume[i] * m.stored_energy_density(&stress, &p.state[i])
-                - p.mass[i] * g.dot(p.position[i]);
+            gone.energy += self.kinetic_of(i) + self.strain_of(i) + self.potential_of(i, g);
         }
         gone.first_time.get_or_insert(self.time);
-        self.particles.retain(|i| !leaving[i], &mut self.body_force);
+        self.dissipation.outflow = gone;
+        let keep: Vec<bool> = leaving.iter().map(|l| !l).collect();
+        self.particles.retain(&keep, &mut self.body_force);
         self.scratch.stencils_ahead = None;
         self.scratch.located = false;
         self.next_signal = None;
