@@ -192,27 +192,26 @@ struct Flow<'a> {
 }
 
 impl<'a> Flow<'a> {
-    /// the flow with the positions it has had it never wrapped through periodic sides: what
-    /// the runout measures of an endless slope follow (R3-15: the centre of mass of a mass
+    /// the flow with the positions it would have had without wrapping through periodic sides:
+    /// what the runout measures of an endless slope follow (R3-15: the centre of mass of a mass
     /// thrown across the seam moved backwards).
     fn unwrapped<St>(r: &Resolved, p: &'a Particles<St>) -> Self {
-        let mut f = Self::of(r, p);
-        if !p.unwrap.is_empty() {
-            let keep = |q: &usize| {
-                r.materials
-                    .flow_mask()
-                    .is_none_or(|m| m.get(usize::from(p.material[*q])).copied().unwrap_or(true))
-            };
-            f.position =
-                Cow::Owned((0..p.len()).filter(keep).map(|q| p.unwrapped_position(q)).collect());
+        if p.unwrap.is_empty() {
+            return Self::of(r, p);
         }
-        f
+        let unwrapped: Vec<Vector> = (0..p.len()).map(|q| p.unwrapped_position(q)).collect();
+        Self::with_positions(r, p, Cow::Owned(unwrapped))
     }
 
     fn of<St>(r: &Resolved, p: &'a Particles<St>) -> Self {
+        Self::with_positions(r, p, Cow::Borrowed(&p.position))
+    }
+
+    /// the flowing particles' fields, with `position` (one per particle) for their positions.
+    fn with_positions<St>(r: &Resolved, p: &'a Particles<St>, position: Cow<'a, [Vector]>) -> Self {
         let Some(mask) = r.materials.flow_mask() else {
             return Self {
-                position: Cow::Borrowed(&p.position),
+                position,
                 velocity: Cow::Borrowed(&p.velocity),
                 mass: Cow::Borrowed(&p.mass),
                 volume: Cow::Borrowed(&p.volume),
@@ -225,7 +224,7 @@ impl<'a> Flow<'a> {
         }
         let idx: Vec<usize> = (0..p.len()).filter(keep).collect();
         Self {
-            position: pick(&p.position, &idx),
+            position: pick(&position, &idx),
             velocity: pick(&p.velocity, &idx),
             mass: pick(&p.mass, &idx),
             volume: pick(&p.volume, &idx),
@@ -824,25 +823,13 @@ fn outflow_report<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     r: &Resolved,
     solver: &Solver<M, S, N>,
 ) -> Option<OutflowReport> {
-    let o = r.config.outflow;
-    let faces: Vec<String> = [("left_wall", o.x_min), ("right_wall", o.x_max)]
-        .into_iter()
-        .filter_map(|(n, c)| c.map(|_| n.to_string()))
-        .collect();
-    if faces.is_empty() {
-        return None;
-    }
-    let gone = solver.outflowed();
-    let total = solver.particles().total_mass() + gone.mass;
-    Some(OutflowReport {
-        faces,
-        particles: gone.particles,
-        mass: gone.mass,
-        mass_fraction: if total > 0.0 { gone.mass / total } else { 0.0 },
-        momentum: vec![gone.momentum.x, gone.momentum.y],
-        energy: gone.energy,
-        first_time: gone.first_time,
-    })
+    let (o, g) = (r.config.outflow, solver.outflowed());
+    OutflowReport::new(
+        &[("left_wall", o.x_min), ("right_wall", o.x_max)],
+        (g.particles, g.mass, g.momentum.to_array().to_vec(), g.energy),
+        g.first_time,
+        solver.particles().total_mass(),
+    )
 }
 
 /// The section a DEM scene runs along as a GeoJSON feature collection: the line from `from` to

@@ -768,25 +768,17 @@ impl<'a> SpaceDriver<'a> {
         let mut warnings: Vec<String> = scene.warnings.iter().map(ToString::to_string).collect();
         warnings.extend(edges.iter().map(EdgeContact::warning));
         let o = scene.config.outflow;
-        let faces: Vec<String> = [
-            ("left_wall", o.x_min),
-            ("right_wall", o.x_max),
-            ("back_wall", o.z_min),
-            ("front_wall", o.z_max),
-        ]
-        .into_iter()
-        .filter_map(|(n, c)| c.map(|_| n.to_string()))
-        .collect();
-        let total = p.mass.iter().sum::<f64>() + gone.mass;
-        let outflow = (!faces.is_empty()).then(|| OutflowReport {
-            faces,
-            particles: gone.particles,
-            mass: gone.mass,
-            mass_fraction: if total > 0.0 { gone.mass / total } else { 0.0 },
-            momentum: gone.momentum.to_array().to_vec(),
-            energy: gone.energy,
-            first_time: gone.first_time,
-        });
+        let outflow = OutflowReport::new(
+            &[
+                ("left_wall", o.x_min),
+                ("right_wall", o.x_max),
+                ("back_wall", o.z_min),
+                ("front_wall", o.z_max),
+            ],
+            (gone.particles, gone.mass, gone.momentum.to_array().to_vec(), gone.energy),
+            gone.first_time,
+            p.mass.iter().sum::<f64>(),
+        );
         let mut summary = RunSummary {
             code_version: env!("CARGO_PKG_VERSION").to_string(),
             scene_origin: scene.origin().to_string(),

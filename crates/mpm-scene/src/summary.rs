@@ -223,6 +223,29 @@ pub struct OutflowReport {
 }
 
 impl OutflowReport {
+    /// the report of a run whose sides named in `faces` (name, `Some` when it is an outflow
+    /// side) let material leave: `particles` of `mass` with `momentum` and `energy` left, from
+    /// `first_time`, and `left` is the mass still in the run; `None` without an outflow side.
+    pub fn new(
+        faces: &[(&str, Option<f64>)],
+        (particles, mass, momentum, energy): (u64, f64, Vec<f64>, f64),
+        first_time: Option<f64>,
+        left: f64,
+    ) -> Option<Self> {
+        let faces: Vec<String> =
+            faces.iter().filter(|(_, c)| c.is_some()).map(|(n, _)| n.to_string()).collect();
+        let total = left + mass;
+        (!faces.is_empty()).then(|| Self {
+            faces,
+            particles,
+            mass,
+            mass_fraction: if total > 0.0 { mass / total } else { 0.0 },
+            momentum,
+            energy,
+            first_time,
+        })
+    }
+
     /// the run's last line about it.
     pub fn line(&self) -> String {
         match self.first_time {
