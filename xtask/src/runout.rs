@@ -406,6 +406,19 @@ pub fn cases(quick: bool) -> Vec<Case> {
         for model in [Model::MohrCoulomb, Model::DpOuter, Model::DpInner] {
             out.push(case(3, a, model, Base::Rough, 8, None));
         }
+        // the rough base as Coulomb friction at the glued grains' angle instead of stuck
+        // nodes (which hold a whole cell's layer still), with the default and the
+        // noise-weighted share: how much of the 3D answer the base and the damping decide
+        let glued = case(3, a, Model::MohrCoulomb, Base::Glued, 8, None);
+        out.push(glued.clone());
+        out.push(Case { pic: Some(Pic::Noise), ..glued });
+    }
+    // the glued base at a = 1 on a coarser and a finer grid (R0/Δx = 6 and 12; 12 takes
+    // 10–20 min on two cores): which way the 3D runout moves with the cells
+    for res in [6, 12] {
+        let glued = case(3, 1.0, Model::MohrCoulomb, Base::Glued, res, None);
+        out.push(glued.clone());
+        out.push(Case { pic: Some(Pic::Noise), ..glued });
     }
     // the side-wall term against the channel it stands for: the 2D runs with δ = 25° at
     // L0/Δx = 10 against the column extruded 0.1 m between two 25° walls in 3D
