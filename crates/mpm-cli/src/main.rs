@@ -429,8 +429,7 @@ fn scenes(write: Option<String>, path: Option<PathBuf>, force: bool) -> ExitCode
         }
         Some(name) => {
             let Some(text) = mpm_run::embedded_scene(&name) else {
-                let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
-                eprintln!("error: no embedded scene `{name}`; choose one of {}", names.join(", "));
+                eprintln!("error: {}", mpm_run::unknown_scene_message(&name));
                 return ExitCode::from(2);
             };
             let path = path.unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));

@@ -39,8 +39,8 @@ pub enum OutputError {
     /// the output directory exists and is not empty, and removing an earlier run's files was
     /// not asked for.
     #[error(
-        "output directory {} already exists and is not empty; choose another with --out or \
-         pass --force to overwrite it",
+        "output directory {} already exists and is not empty; choose another (--out, or out= in \
+         Python) or pass --force (force=True in Python) to overwrite it",
         .0.display()
     )]
     OutputExists(PathBuf),

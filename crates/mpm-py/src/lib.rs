@@ -101,11 +101,21 @@ impl Scene {
     #[pyo3(signature = (name = "flume"))]
     fn embedded(py: Python<'_>, name: &str) -> PyResult<Scene> {
         let Some(text) = mpm_run::embedded_scene(name) else {
+            // a SceneError (a ValueError) with its parts, as a refused scene file has them
+            let err = SceneError::new_err(mpm_run::unknown_scene_message(name));
+            let v = err.value(py);
             let names: Vec<&str> = mpm_run::SCENES.iter().map(|(n, _)| *n).collect();
-            return Err(PyValueError::new_err(format!(
-                "no embedded scene `{name}`: the embedded scenes are {}",
-                names.join(", ")
-            )));
+            let _ = v.setattr("origin", format!("embedded:{name}"));
+            let _ = v.setattr("line", py.None());
+            let _ = v.setattr("column", py.None());
+            let _ = v.setattr("path", "name");
+            let _ = v.setattr("value", name);
+            let _ = v.setattr("problem", "no embedded scene has this name");
+            let _ = v.setattr("admissible", names.join(", "));
+            let fix = mpm_run::nearest_scene(name)
+                .map_or("choose one of granular_mpm.scenes()".to_string(), |n| format!("`{n}`"));
+            let _ = v.setattr("fix", fix);
+            return Err(err);
         };
         mpm_run::AnyScene::from_str(text, &format!("embedded:{name}"))
             .map(|inner| Scene { inner })

@@ -235,3 +235,21 @@ def test_parametric_sweep_plots_the_travel_angle(tmp_path):
     assert list(table["basal_friction_deg"]) == [20.0, 25.0, 30.0]
     # a rougher base stops the slide sooner: the travel angle grows with the friction angle
     assert np.all(np.diff(table["travel_angle_deg"]) > 0), table
+
+
+def test_bad_arguments_are_value_errors_naming_the_argument():
+    # threads=-1 was an OverflowError, threads=0 was taken as one thread, advance_to a past
+    # time returned at once, and a mistyped embedded name was a plain ValueError
+    for bad in (-1, 0, True, 2.0, 10**6):
+        with pytest.raises(ValueError, match="threads"):
+            gm.run(short_fall(), threads=bad)
+    sim = gm.Simulation(short_fall())
+    with pytest.raises(ValueError, match="step"):
+        sim.step(-1)
+    sim.step(2)
+    with pytest.raises(ValueError, match="already at"):
+        sim.advance_to(-1.0)
+    assert sim.steps == 2
+    with pytest.raises(gm.SceneError, match="did you mean `flume`") as caught:
+        gm.Scene.embedded("flum")
+    assert caught.value.fix == "`flume`" and caught.value.path == "name"

@@ -71,6 +71,7 @@ pub use mpm_output::OutputError;
 pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
+pub use options::{MAX_THREADS, available_threads};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
 pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation};
 pub use space::{check_space_scene, run_space_scene};
@@ -79,6 +80,6 @@ pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};
 pub use mpm_scene::{
     AnyScene, DEFAULT_ENERGY_ALARM, DEFAULT_SCENE, SCENES, Scene, SceneError, SpaceScene,
     declared_dimension, embedded_scene, load_any_scene_file, load_scene_file, load_scene_str,
-    load_space_str, title_of,
+    load_space_str, nearest_scene, title_of, unknown_scene_message,
 };
 pub use mpm_scene::{file as scene, limits, presets};

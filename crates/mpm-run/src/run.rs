@@ -276,7 +276,7 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
     if let Some(done) = finished(dir, &c) {
         opts.progress.note(&format!(
             "{}: the run has already ended ({:?} at t = {} s after {} steps); nothing to resume, \
-             its files are left as they are (run the scene again with --force to redo it)",
+             its files are left as they are (run the scene again with --force, or force=True in Python, to redo it)",
             dir.display(),
             done.status,
             done.simulated_time,
@@ -376,9 +376,9 @@ where
     T: Send,
 {
     // rayon's global pool size follows RAYON_NUM_THREADS, else one thread per core.
-    let available = opts.threads.unwrap_or_else(rayon::current_num_threads);
+    let available = crate::options::available_threads(opts.threads)?;
     let b = rayon::ThreadPoolBuilder::new()
-        .num_threads(mpm_solver::useful_threads(particles, available.max(1)));
+        .num_threads(mpm_solver::useful_threads(particles, available));
     let pool = b.build().map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
     pool.install(|| f(rayon::current_num_threads()))
 }

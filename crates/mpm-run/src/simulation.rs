@@ -132,7 +132,7 @@ impl Simulation {
         let (commands, inbox) = mpsc::channel();
         let (outbox, replies) = mpsc::channel();
         let interrupt = Arc::new(AtomicBool::new(false));
-        let available = threads.unwrap_or_else(rayon::current_num_threads).max(1);
+        let available = crate::options::available_threads(threads)?;
         let count = mpm_solver::useful_threads(scene.resolved().seeds.len(), available);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(count)
@@ -195,6 +195,14 @@ impl Simulation {
             Limit::Time(t) if !t.is_finite() => {
                 return Err(RunError::Arguments(format!(
                     "advance to t = {t} s: not a finite time"
+                )));
+            }
+            // (a time already passed would return at once, as if it had been reached)
+            Limit::Time(t) if t < self.time => {
+                return Err(RunError::Arguments(format!(
+                    "advance to t = {t} s: the simulation is already at t = {} s; give a time \
+                     at or after it",
+                    self.time
                 )));
             }
             _ => {}

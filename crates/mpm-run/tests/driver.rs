@@ -571,3 +571,28 @@ plots = false
     assert_eq!(r.status, mpm_scene::RunStatus::Completed);
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// Bad arguments are refused before any work, naming the argument: a thread count outside
+/// 1..=MAX_THREADS (0 was taken silently as one), and a time the simulation has already passed
+/// (it returned at once, as if the time had been reached).
+#[test]
+fn a_thread_count_of_zero_and_a_time_already_passed_are_refused() {
+    assert_eq!(mpm_run::available_threads(Some(3)).unwrap(), 3);
+    for bad in [0, mpm_run::MAX_THREADS + 1] {
+        let e = mpm_run::available_threads(Some(bad)).unwrap_err().to_string();
+        assert!(e.contains(&format!("threads = {bad}")), "{e}");
+    }
+    let scene = load_scene_str(mpm_run::embedded_scene("free_fall").unwrap(), "free_fall").unwrap();
+    let zero = RunOptions { threads: Some(0), ..Default::default() };
+    assert!(matches!(run_scene(&scene, &zero), Err(RunError::Arguments(_))));
+    assert!(Simulation::new(&scene, Some(0), &mut || false).is_err());
+    let mut sim = Simulation::new(&scene, None, &mut || false).unwrap();
+    sim.advance(Limit::Steps(3), &mut || false).unwrap();
+    let now = sim.time();
+    let e = sim.advance(Limit::Time(now - 1e-3), &mut || false).unwrap_err().to_string();
+    assert!(e.contains("already at"), "{e}");
+    assert_eq!(sim.time(), now);
+    // the time it is at is admissible: nothing to do
+    sim.advance(Limit::Time(now), &mut || false).unwrap();
+    assert_eq!(sim.steps(), 3);
+}

@@ -60,7 +60,9 @@ pub use scene::{
     GRANULAR_SEPARATION_DENSITY, GridBuilt, InitialState, MaterialsBuilt, Reference, Resolved,
     ResolvedOutput, Scene, SectionLine, Seed, StopAtRest, Warning, fnv1a,
 };
-pub use scenes::{DEFAULT_SCENE, SCENES, embedded_scene, title_of};
+pub use scenes::{
+    DEFAULT_SCENE, SCENES, embedded_scene, nearest_scene, title_of, unknown_scene_message,
+};
 pub use space::{SpaceGrid, SpaceScene, declared_dimension, dispatch_space};
 pub use summary::{
     DtStats, EnergyReport, InitialStateSummary, RunStatus, RunSummary, RunoutIndicators,

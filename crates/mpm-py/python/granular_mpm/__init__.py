@@ -21,6 +21,7 @@ continues).
 from __future__ import annotations
 
 import json
+import numbers
 import os
 import sys
 import tempfile
@@ -330,9 +331,9 @@ def run(
     callback = _callback(progress)
     if out is None:
         with tempfile.TemporaryDirectory(prefix="granular_mpm-") as tmp:
-            raw = _native.run(native, tmp, threads, True, callback)
+            raw = _native.run(native, tmp, _threads(threads), True, callback)
             return _collect(raw, Path(tmp), False, progress)
-    raw = _native.run(native, os.fspath(out), threads, force, callback)
+    raw = _native.run(native, os.fspath(out), _threads(threads), force, callback)
     return _collect(raw, Path(out), True, progress)
 
 
@@ -343,8 +344,29 @@ def resume(
 ) -> Result:
     """Continues the run in folder ``out`` from its checkpoint, bit-identically to a run that
     was never interrupted."""
-    raw = _native.resume(os.fspath(out), threads, _callback(progress))
+    raw = _native.resume(os.fspath(out), _threads(threads), _callback(progress))
     return _collect(raw, Path(out), True, progress)
+
+
+# The most worker threads a run takes (mpm-run's MAX_THREADS).
+_MAX_THREADS = 4096
+
+
+def _threads(threads: Optional[int]) -> Optional[int]:
+    """``threads`` checked: ``None`` (one per core) or a whole number 1..4096."""
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral):
+        raise ValueError(
+            f"threads = {threads!r}: give a whole number of worker threads (1 to "
+            f"{_MAX_THREADS}), or None for one per core"
+        )
+    if not 1 <= threads <= _MAX_THREADS:
+        raise ValueError(
+            f"threads = {threads}: give 1 to {_MAX_THREADS} worker threads, or None for one "
+            "per core"
+        )
+    return int(threads)
 
 
 def _as_scene(scene: Union[Scene, str, PathLike]) -> Scene:
@@ -370,12 +392,14 @@ class Simulation:
     """
 
     def __init__(self, scene: Union[Scene, str, PathLike], threads: Optional[int] = None):
-        self._native = _native.Simulation(_as_scene(scene)._native, threads)
+        self._native = _native.Simulation(_as_scene(scene)._native, _threads(threads))
 
     def step(self, n: int = 1) -> Optional[str]:
         """``n`` more steps. Returns ``None``, or why the run stopped before (``"at_rest"``,
         ``"energy_alarm"``, ``"step_limit"``)."""
-        return self._native.step(n)
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 0:
+            raise ValueError(f"step(n): n = {n!r}: give a whole number of steps, 0 or more")
+        return self._native.step(int(n))
 
     def advance_to(self, t: float) -> Optional[str]:
         """Steps until simulated time ``t`` (s), the last step shortened to land on it (so the
