@@ -131,6 +131,19 @@ impl Scene {
             .map_err(|e| scene_error(py, &e))
     }
 
+    /// this scene without the field at `path` (its default applies), validated again.
+    fn without_value(&self, py: Python<'_>, path: &str) -> PyResult<Scene> {
+        self.inner.without_value(path).map(|inner| Scene { inner }).map_err(|e| scene_error(py, &e))
+    }
+
+    /// the value the scene gives at `path` as JSON text, or `None` when it gives none (its
+    /// default applies).
+    fn value_json(&self, py: Python<'_>, path: &str) -> PyResult<Option<String>> {
+        let v = self.inner.value_at(path).map_err(|e| scene_error(py, &e))?;
+        v.map(|v| serde_json::to_string(&v).map_err(|e| PyRuntimeError::new_err(e.to_string())))
+            .transpose()
+    }
+
     /// the scene's TOML text.
     #[getter]
     fn text(&self) -> &str {

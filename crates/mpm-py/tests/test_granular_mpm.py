@@ -253,3 +253,20 @@ def test_bad_arguments_are_value_errors_naming_the_argument():
     with pytest.raises(gm.SceneError, match="did you mean `flume`") as caught:
         gm.Scene.embedded("flum")
     assert caught.value.fix == "`flume`" and caught.value.path == "name"
+
+
+def test_get_reads_a_field_and_unset_lets_its_default_apply():
+    flume = gm.Scene.embedded("flume")
+    assert flume.get("solver.courant") == 0.1
+    assert flume.get("output.probes")[1]["nearest"] == [1.07, 0.86]
+    assert flume.get("solver.dt") is None
+    # courant and dt are exclusive: switching needs courant removed first
+    with pytest.raises(gm.SceneError):
+        flume.copy().set("solver.dt", 1e-4)
+    fixed = flume.copy().unset("solver.courant").set("solver.dt", 1e-4)
+    assert fixed.get("solver.courant") is None and fixed.get("solver.dt") == 1e-4
+    with pytest.raises(gm.SceneError, match="does not give it"):
+        flume.copy().unset("solver.dt")
+    # a mistyped table is refused with the nearest name (it created a material without a kind)
+    with pytest.raises(gm.SceneError, match="did you mean `sand`"):
+        flume.copy().set("materials.snd.friction_angle_deg", 30.0)

@@ -171,6 +171,21 @@ impl AnyScene {
             AnyScene::Space(s) => AnyScene::Space(Box::new(s.with_value(path, value)?)),
         })
     }
+
+    /// the same scene without the field at `path` (its default applies), validated again
+    /// ([`Scene::without_value`]).
+    pub fn without_value(&self, path: &str) -> Result<AnyScene, SceneError> {
+        Ok(match self {
+            AnyScene::Plane(s) => AnyScene::Plane(Box::new(s.without_value(path)?)),
+            AnyScene::Space(s) => AnyScene::Space(Box::new(s.without_value(path)?)),
+        })
+    }
+
+    /// the value the scene's text gives at `path` (`None` if it gives none: its default
+    /// applies); refused only when `path` is not a field path.
+    pub fn value_at(&self, path: &str) -> Result<Option<toml::Value>, SceneError> {
+        validate::edit::value_at(self.text(), self.origin(), path)
+    }
 }
 
 /// Reads and validates the scene file at `path`, 2D or 3D as its `[grid] dimension` says

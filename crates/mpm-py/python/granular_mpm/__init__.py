@@ -139,6 +139,19 @@ class Scene:
         self._native = self._native.with_value(path, _toml_value(value))
         return self
 
+    def get(self, path: str) -> Any:
+        """The value the scene gives at ``path`` (a number, string, bool, list or dict), or
+        ``None`` when it gives none and the format's default applies."""
+        text = self._native.value_json(path)
+        return None if text is None else json.loads(text)
+
+    def unset(self, path: str) -> "Scene":
+        """Removes the field at ``path`` so that its default applies (e.g. ``solver.courant``
+        before ``solver.dt`` is set: the two are exclusive), and validates the scene again;
+        returns the scene. On a refusal the scene is left as it was."""
+        self._native = self._native.without_value(path)
+        return self
+
     def copy(self) -> "Scene":
         """An independent copy (to vary one scene in a loop)."""
         return Scene(self._native)

@@ -68,6 +68,130 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// the same scene without the field at `path` (its default then applies), validated again:
+    /// e.g. `solver.courant` removed before `solver.dt` is set.
+    pub fn without_value(&self, path: &str) -> Result<Scene, SceneError> {
+        let text = removed(&self.text, &self.origin, path)?;
+        let origin = format!("{} (without {path})", self.origin);
+        load(&text, &origin, self.files_base()).map(|mut scene| {
+            scene.origin = self.origin.clone();
+            scene
+        })
+    }
+}
+
+impl SpaceScene {
+    /// the same 3D scene without the field at `path`, validated again (as
+    /// [`Scene::without_value`]).
+    pub fn without_value(&self, path: &str) -> Result<SpaceScene, SceneError> {
+        let text = removed(&self.text, &self.origin, path)?;
+        let origin = format!("{} (without {path})", self.origin);
+        load_space(&text, &origin, self.files_base()).map(|mut scene| {
+            scene.origin = self.origin.clone();
+            scene
+        })
+    }
+}
+
+/// the value at `path` in a scene's `text` (`None` when the scene does not give it: its default
+/// applies), or why the path is not one.
+pub(crate) fn value_at(
+    text: &str,
+    origin: &str,
+    path: &str,
+) -> Result<Option<toml::Value>, SceneError> {
+    let refuse = |problem: &str| SceneError {
+        origin: origin.to_string(),
+        line: None,
+        column: None,
+        path: path.to_string(),
+        value: None,
+        problem: problem.to_string(),
+        admissible: String::new(),
+        fix: "name the field as in the scene file, its tables joined by dots and array \
+              elements by their index: `materials.sand.friction_angle_deg`, `bodies[0].min`"
+            .into(),
+    };
+    let steps = steps(path).ok_or_else(|| refuse("not a field path"))?;
+    let mut v: toml::Value = toml::from_str(text).map_err(|_| refuse("the scene's text"))?;
+    for step in &steps {
+        let next = match (step, v) {
+            (Step::Key(k), toml::Value::Table(mut t)) => t.remove(*k),
+            (Step::Index(i), toml::Value::Array(mut a)) if *i < a.len() => Some(a.swap_remove(*i)),
+            _ => None,
+        };
+        match next {
+            Some(n) => v = n,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(v))
+}
+
+/// `text` without the field at `path` (comments and layout of the rest kept), or why not.
+fn removed(text: &str, origin: &str, path: &str) -> Result<String, SceneError> {
+    let refuse = |problem: String| SceneError {
+        origin: origin.to_string(),
+        line: None,
+        column: None,
+        path: path.to_string(),
+        value: None,
+        problem,
+        admissible: String::new(),
+        fix: "name a field the scene gives, its tables joined by dots: `solver.courant`".into(),
+    };
+    let steps = steps(path).ok_or_else(|| refuse("not a field path".into()))?;
+    let (Step::Key(last), parents) = steps.split_last().ok_or_else(|| refuse("empty".into()))?
+    else {
+        return Err(refuse("an array element cannot be removed: set the whole array".into()));
+    };
+    let mut doc: DocumentMut =
+        text.parse().map_err(|e| refuse(format!("the scene's text cannot be edited: {e}")))?;
+    if !remove_in_item(doc.as_item_mut(), parents, last) {
+        return Err(refuse("the scene does not give it".into()));
+    }
+    Ok(doc.to_string())
+}
+
+/// removes key `last` of the table at `steps` under `item`; false if there is none.
+fn remove_in_item(item: &mut Item, steps: &[Step<'_>], last: &str) -> bool {
+    match (steps.split_first(), item) {
+        (None, Item::Table(t)) => t.remove(last).is_some(),
+        (Some((Step::Key(k), rest)), Item::Table(t)) => {
+            t.get_mut(k).is_some_and(|i| remove_in_item(i, rest, last))
+        }
+        (Some((Step::Index(i), rest)), Item::ArrayOfTables(a)) => {
+            a.get_mut(*i).is_some_and(|t| remove_in_table(t, rest, last))
+        }
+        (_, Item::Value(v)) => remove_in_value(v, steps, last),
+        _ => false,
+    }
+}
+
+/// [`remove_in_item`] under a table of an array of tables.
+fn remove_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], last: &str) -> bool {
+    match steps.split_first() {
+        None => t.remove(last).is_some(),
+        Some((Step::Key(k), rest)) => t.get_mut(k).is_some_and(|i| remove_in_item(i, rest, last)),
+        Some((Step::Index(_), _)) => false,
+    }
+}
+
+/// [`remove_in_item`] inside an inline value (an inline table or an array).
+fn remove_in_value(v: &mut Value, steps: &[Step<'_>], last: &str) -> bool {
+    match (steps.split_first(), v) {
+        (None, Value::InlineTable(t)) => t.remove(last).is_some(),
+        (Some((Step::Key(k), rest)), Value::InlineTable(t)) => {
+            t.get_mut(k).is_some_and(|v| remove_in_value(v, rest, last))
+        }
+        (Some((Step::Index(i), rest)), Value::Array(a)) => {
+            a.get_mut(*i).is_some_and(|v| remove_in_value(v, rest, last))
+        }
+        _ => false,
+    }
+}
+
 impl SpaceScene {
     /// the same 3D scene with the field at `path` set to `value`, validated again (as
     /// [`Scene::with_value`]).
@@ -166,6 +290,23 @@ fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> R
         }
         return Ok(());
     }
+    // a missing table is created, unless the scene has one of a near name: a typo
+    // (`materials.snd.friction_angle_deg`) would otherwise make a new material without a kind
+    if !t.contains_key(k) {
+        let limit = (k.chars().count() / 3).max(1);
+        let near = t
+            .iter()
+            .filter(|(_, i)| i.is_table() || i.is_inline_table())
+            .map(|(name, _)| (strsim::levenshtein(k, name), name))
+            .filter(|&(d, _)| d <= limit)
+            .min_by_key(|&(d, _)| d);
+        if let Some((_, name)) = near {
+            return Err(format!(
+                "the scene has no table `{k}` here: did you mean `{name}`? (to add a table of \
+                 that name, set it whole, e.g. `{k}` = {{ kind = ... }})"
+            ));
+        }
+    }
     let next = t.entry(k).or_insert_with(|| {
         let mut new = toml_edit::Table::new();
         new.set_implicit(true);
@@ -220,6 +361,61 @@ fn set_value(v: &mut Value, steps: &[Step<'_>], value: Value) -> Result<(), Stri
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn flume() -> Scene {
+        crate::load_scene_str(crate::embedded_scene("flume").unwrap(), "flume").unwrap()
+    }
+
+    /// Switching from `courant` to `dt` needs the first removed (both given are refused);
+    /// removing a field the scene does not give, or an array element, is refused at its path.
+    #[test]
+    fn a_removed_field_takes_its_default_and_an_absent_one_is_refused() {
+        let f = flume();
+        assert!(f.with_value("solver.dt", "1e-4").is_err());
+        let fixed = f.without_value("solver.courant").unwrap().with_value("solver.dt", "1e-4");
+        let fixed = fixed.unwrap();
+        assert!(!fixed.text().contains("courant") && fixed.text().contains("dt = 1e-4"));
+        // the comments of the rest stay
+        assert!(fixed.text().contains("# centre, front toe"));
+        for (path, why) in [
+            ("solver.dt", "does not give it"),
+            ("nothing.here", "does not give it"),
+            ("output.probes[0]", "array element"),
+            ("a..b", "not a field path"),
+        ] {
+            let e = f.without_value(path).unwrap_err();
+            assert!(e.problem.contains(why) && e.path == path, "{path}: {}", e.problem);
+        }
+    }
+
+    /// `value_at` reads what the text gives, and `None` where a default applies.
+    #[test]
+    fn a_field_is_read_by_its_path() {
+        let any = crate::AnyScene::Plane(Box::new(flume()));
+        assert_eq!(any.value_at("solver.courant").unwrap(), Some(toml::Value::Float(0.1)));
+        assert_eq!(
+            any.value_at("output.probes[1].nearest[0]").unwrap(),
+            Some(toml::Value::Float(1.07))
+        );
+        assert_eq!(any.value_at("solver.dt").unwrap(), None);
+        assert_eq!(any.value_at("output.probes[7]").unwrap(), None);
+        assert!(any.value_at("a..b").is_err());
+    }
+
+    /// A mistyped table is refused with the nearest name instead of being created (a new
+    /// material without a kind, whose message asked for its `kind`).
+    #[test]
+    fn a_mistyped_table_is_refused_with_the_nearest_name() {
+        let e = flume().with_value("materials.snd.friction_angle_deg", "30.0").unwrap_err();
+        assert!(e.problem.contains("did you mean `sand`?"), "{}", e.problem);
+        assert_eq!(e.path, "materials.snd.friction_angle_deg");
+        // a table of no near name is still created: a second material
+        let two = flume().with_value("materials.gravel.kind", "\"elastic\"");
+        assert!(two.is_err_and(|e| !e.problem.contains("did you mean")));
+        // a table of a near name is added whole
+        let whole = "{ kind = \"elastic\", young = 1e6, poisson = 0.3, density = 1600.0 }";
+        assert!(flume().with_value("materials.sand2", whole).is_ok());
+    }
 
     #[test]
     fn paths_are_split_into_keys_and_indices() {

@@ -12,7 +12,7 @@
 
 mod bodies;
 mod boundaries;
-mod edit;
+pub(crate) mod edit;
 mod grid;
 mod initial_state;
 mod materials;
