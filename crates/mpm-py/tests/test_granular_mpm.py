@@ -270,3 +270,29 @@ def test_get_reads_a_field_and_unset_lets_its_default_apply():
     # a mistyped table is refused with the nearest name (it created a material without a kind)
     with pytest.raises(gm.SceneError, match="did you mean `sand`"):
         flume.copy().set("materials.snd.friction_angle_deg", 30.0)
+
+
+@pytest.mark.parametrize("vtk_format", ["binary", "compressed", "ascii"])
+def test_a_frame_reads_back_the_particles_of_the_run(tmp_path, vtk_format):
+    # the run's last frame holds, to the bit, the state a stepped simulation ends with (every
+    # format keeps full f64 precision), and the series the run wrote are in the result
+    scene = short_fall().set("output.vtk", True).set("output.vtk_format", vtk_format)
+    ran = gm.run(scene, out=tmp_path / vtk_format)
+    times = [t for t, _ in ran.frames]
+    assert times[0] == 0.0 and times[-1] == pytest.approx(scene.end_time, abs=1e-12)
+    last = ran.frame()
+    sim = gm.Simulation(scene)
+    sim.advance_to(scene.end_time)
+    f = sim.fields()
+    assert last["time"] == times[-1]
+    np.testing.assert_array_equal(last["position"][:, :2], f["position"])
+    np.testing.assert_array_equal(last["velocity"][:, :2], f["velocity"])
+    assert last["stress"].shape == (sim.particle_count, 3, 3)
+    np.testing.assert_array_equal(last["material"], f["material"])
+    first = ran.frame(0)
+    np.testing.assert_array_equal(first["position"][:, :2], f["initial_position"])
+    assert ran.series("walls") is not None
+    with pytest.raises(ValueError, match="frames"):
+        ran.frame(len(times))
+    with pytest.raises(ValueError, match="out="):
+        _ = gm.run(scene).frames

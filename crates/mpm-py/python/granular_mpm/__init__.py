@@ -23,11 +23,14 @@ from __future__ import annotations
 import json
 import numbers
 import os
+import re
+import struct
 import sys
 import tempfile
 import warnings
+import zlib
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -44,13 +47,14 @@ __all__ = [
     "resume",
     "scenes",
     "read_series",
+    "read_frame",
     "__version__",
 ]
 
 __version__: str = _native.__version__
 
 #: The series a run writes, by name (``<name>.csv`` in its folder), when the scene asks for them.
-SERIES = ("energy", "runout", "probes", "envelope", "deposit")
+SERIES = ("energy", "runout", "probes", "envelope", "deposit", "walls")
 
 PathLike = Union[str, "os.PathLike[str]"]
 ProgressCallback = Callable[[float, float, int], Any]
@@ -215,6 +219,66 @@ def read_series(path: PathLike) -> Dict[str, np.ndarray]:
     return columns
 
 
+_VTK_TYPES = {"Float64": "<f8", "Float32": "<f4", "Int32": "<i4", "Int64": "<i8", "UInt8": "u1"}
+
+
+def _appended_bytes(data: bytes, at: int, compressed: bool) -> bytes:
+    """One appended array's bytes at ``at``: a UInt64 byte count then the values, or (zlib) the
+    header ``[blocks, block size, last partial size, compressed sizes...]`` then the blocks."""
+    if not compressed:
+        (n,) = struct.unpack_from("<Q", data, at)
+        return data[at + 8 : at + 8 + n]
+    blocks, _, _ = struct.unpack_from("<3Q", data, at)
+    sizes = struct.unpack_from(f"<{blocks}Q", data, at + 24)
+    p = at + 24 + 8 * blocks
+    out = []
+    for size in sizes:
+        out.append(zlib.decompress(data[p : p + size]))
+        p += size
+    return b"".join(out)
+
+
+def read_frame(path: PathLike) -> Dict[str, Any]:
+    """One particle frame (``frames/particles_NNNNNN.vtp``, any ``vtk_format``) as NumPy arrays:
+    ``position``, ``velocity`` and ``displacement`` (N × 3, z = 0 in 2D), ``stress`` (N × 3 × 3,
+    Pa, tension positive, plane strain's σ_zz included), ``pressure``, ``plastic_strain``,
+    ``density`` (N), ``body`` and ``material`` (N, integers), as far as ``output.fields`` wrote
+    them, and ``time`` (s)."""
+    data = Path(path).read_bytes()
+    marker = b'<AppendedData encoding="raw">'
+    cut = data.find(marker)
+    head = (data if cut < 0 else data[:cut]).decode("utf-8")
+    if "<VTKFile" not in head or "PolyData" not in head:
+        raise ValueError(f"{path}: not a VTK PolyData particle frame")
+    compressed = 'compressor="vtkZLibDataCompressor"' in head
+    start = None if cut < 0 else data.index(b"_", cut + len(marker)) + 1
+    out: Dict[str, Any] = {}
+    for m in re.finditer(r"<DataArray\s([^>]*?)(/?)>", head):
+        attrs = dict(re.findall(r'(\w+)="([^"]*)"', m.group(1)))
+        name = attrs.get("Name", "")
+        if name in ("connectivity", "offsets"):
+            continue
+        dtype = np.dtype(_VTK_TYPES[attrs["type"]])
+        if attrs.get("format") == "appended":
+            if start is None:
+                raise ValueError(f"{path}: an appended array without the appended data")
+            raw = _appended_bytes(data, start + int(attrs["offset"]), compressed)
+            values = np.frombuffer(raw, dtype=dtype).copy()
+        else:
+            text = head[m.end() : head.index("</DataArray>", m.end())]
+            values = np.array(text.split(), dtype=dtype)
+        if name == "TimeValue":
+            out["time"] = float(values[0])
+            continue
+        components = int(attrs.get("NumberOfComponents", "1"))
+        if components == 9:
+            values = values.reshape(-1, 3, 3)
+        elif components > 1:
+            values = values.reshape(-1, components)
+        out[name] = values
+    return out
+
+
 def _frame(columns: Dict[str, np.ndarray]) -> Any:
     try:
         import pandas as pd
@@ -227,9 +291,10 @@ class Result:
     """What a run returns: its summary and its series.
 
     ``summary`` is ``summary.json`` as a dict. Each series (``energy``, ``runout``, ``probes``,
-    ``envelope``, ``deposit``) is a pandas DataFrame when pandas is installed, else a dict of
-    NumPy arrays, or ``None`` when the scene did not ask for it. ``out`` is the run's folder
-    (``None`` when the run wrote into a temporary folder, since removed).
+    ``envelope``, ``deposit``, ``walls``) is a pandas DataFrame when pandas is installed, else a
+    dict of NumPy arrays, or ``None`` when the scene did not ask for it. ``out`` is the run's
+    folder (``None`` when the run wrote into a temporary folder, since removed); ``frames`` and
+    ``frame(i)`` read its particle frames.
     """
 
     def __init__(
@@ -276,6 +341,39 @@ class Result:
     def deposit(self) -> Any:
         """Per ground station: the final deposit's thickness."""
         return self._get("deposit")
+
+    @property
+    def walls(self) -> Any:
+        """Normal and shear load on each boundary over time (``walls.csv``)."""
+        return self._get("walls")
+
+    @property
+    def frames(self) -> List[Tuple[float, Path]]:
+        """The particle frames as (time, path), from ``particles.pvd`` (empty when the scene
+        wrote none). Needs a run with ``out``: a temporary folder is gone with its frames."""
+        if self.out is None:
+            raise ValueError(
+                "the run wrote into a temporary folder, removed with its frames: run it with "
+                "out=FOLDER to keep them"
+            )
+        pvd = self.out / "particles.pvd"
+        if not pvd.is_file():
+            return []
+        text = pvd.read_text(encoding="utf-8")
+        found = re.findall(r'<DataSet timestep="([^"]+)"[^>]*file="([^"]+)"', text)
+        return [(float(t), self.out / f) for t, f in found]
+
+    def frame(self, index: int = -1) -> Dict[str, Any]:
+        """The particle fields of frame ``index`` (the last by default) as NumPy arrays
+        (:func:`read_frame`)."""
+        frames = self.frames
+        if not frames:
+            raise ValueError("the run wrote no particle frames (`[output] vtk = false`?)")
+        if isinstance(index, bool) or not isinstance(index, numbers.Integral):
+            raise ValueError(f"frame(index): index = {index!r}: give a whole number")
+        if not -len(frames) <= index < len(frames):
+            raise ValueError(f"frame(index): index = {index}: the run wrote {len(frames)} frames")
+        return read_frame(frames[index][1])
 
     @property
     def status(self) -> str:
