@@ -296,3 +296,24 @@ def test_a_frame_reads_back_the_particles_of_the_run(tmp_path, vtk_format):
         ran.frame(len(times))
     with pytest.raises(ValueError, match="out="):
         _ = gm.run(scene).frames
+
+
+def test_a_3d_runs_hazard_maps_are_arrays_that_add_up_to_its_summary(tmp_path):
+    # the maps are read from the run's rasters: their sums must be the summary's own figures
+    # (1e-12: summation order), and cells the block never covered have no arrival (NaN)
+    scene = (
+        gm.Scene.from_str(BLOCK_3D, "block3d")
+        .set("output.hazard_maps", True)
+        .set("boundaries.ground", "rough")
+    )
+    ran = gm.run(scene, out=tmp_path / "maps")
+    maps, h = ran.maps, ran.summary["hazard_maps"]
+    depth, geo = maps["deposit_depth"]
+    cell = geo["cellsize"]
+    assert cell == pytest.approx(0.1) and geo["xllcorner"] == 0.0
+    assert np.nansum(depth) * cell**2 == pytest.approx(h["deposit_volume"], rel=1e-12)
+    assert np.nanmax(maps["max_height"][0]) == pytest.approx(h["max_flow_height"], rel=1e-12)
+    arrival = maps["arrival_time"][0]
+    assert np.count_nonzero(~np.isnan(arrival)) * cell**2 == pytest.approx(h["affected_area"])
+    assert np.isnan(arrival).any()
+    assert gm.run(short_fall(), out=tmp_path / "plane").maps == {}

@@ -48,6 +48,7 @@ __all__ = [
     "scenes",
     "read_series",
     "read_frame",
+    "read_raster",
     "__version__",
 ]
 
@@ -279,6 +280,35 @@ def read_frame(path: PathLike) -> Dict[str, Any]:
     return out
 
 
+def read_raster(path: PathLike) -> Tuple[np.ndarray, Dict[str, float]]:
+    """An ESRI ASCII grid (a 3D run's ``maps/*.asc``) as (values, georeference): values is
+    nrows × ncols with row 0 the northernmost, cells of ``NODATA_value`` as NaN; the
+    georeference has ``xllcorner``, ``yllcorner`` (the lower-left corner, map units) and
+    ``cellsize``. Cell (r, c) is centred at x = xllcorner + (c + ½)·cellsize,
+    y = yllcorner + (nrows − r − ½)·cellsize."""
+    header: Dict[str, float] = {}
+    rows: List[List[float]] = []
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0][0].isalpha():
+                header[parts[0].lower()] = float(parts[1])
+            else:
+                rows.append([float(v) for v in parts])
+    for key in ("ncols", "nrows", "xllcorner", "yllcorner", "cellsize"):
+        if key not in header:
+            raise ValueError(f"{path}: not an ESRI ASCII grid (no {key})")
+    values = np.array(rows, dtype=float)
+    if values.shape != (int(header["nrows"]), int(header["ncols"])):
+        raise ValueError(f"{path}: {values.shape} values against the header's nrows × ncols")
+    if "nodata_value" in header:
+        values[values == header["nodata_value"]] = np.nan
+    geo = {k: header[k] for k in ("xllcorner", "yllcorner", "cellsize")}
+    return values, geo
+
+
 def _frame(columns: Dict[str, np.ndarray]) -> Any:
     try:
         import pandas as pd
@@ -362,6 +392,21 @@ class Result:
         text = pvd.read_text(encoding="utf-8")
         found = re.findall(r'<DataSet timestep="([^"]+)"[^>]*file="([^"]+)"', text)
         return [(float(t), self.out / f) for t, f in found]
+
+    @property
+    def maps(self) -> Dict[str, Tuple[np.ndarray, Dict[str, float]]]:
+        """A 3D run's hazard maps (``maps/*.asc``: ``max_height``, ``max_speed``,
+        ``arrival_time``, ``deposit_depth``, ...) by name, each as (values, georeference)
+        (:func:`read_raster`); empty for a 2D run. Needs a run with ``out``."""
+        if self.out is None:
+            raise ValueError(
+                "the run wrote into a temporary folder, removed with its maps: run it with "
+                "out=FOLDER to keep them"
+            )
+        folder = self.out / "maps"
+        if not folder.is_dir():
+            return {}
+        return {p.stem: read_raster(p) for p in sorted(folder.glob("*.asc"))}
 
     def frame(self, index: int = -1) -> Dict[str, Any]:
         """The particle fields of frame ``index`` (the last by default) as NumPy arrays
