@@ -96,6 +96,20 @@ impl Scene {
             .map_err(|e| scene_error(py, &e))
     }
 
+    /// validates a scene given as TOML text whose named files are relative to `dir`.
+    #[staticmethod]
+    fn from_str_in(py: Python<'_>, text: &str, name: &str, dir: PathBuf) -> PyResult<Scene> {
+        mpm_run::AnyScene::from_str_in(text, name, &dir)
+            .map(|inner| Scene { inner })
+            .map_err(|e| scene_error(py, &e))
+    }
+
+    /// the folder the scene's named files were found in (`None` if it names none from a file).
+    #[getter]
+    fn files_dir(&self) -> Option<&str> {
+        self.inner.files_dir()
+    }
+
     /// an embedded scene (`granular_mpm.scenes()` lists them; the default is the paper's flume).
     #[staticmethod]
     #[pyo3(signature = (name = "flume"))]

@@ -317,3 +317,25 @@ def test_a_3d_runs_hazard_maps_are_arrays_that_add_up_to_its_summary(tmp_path):
     assert np.count_nonzero(~np.isnan(arrival)) * cell**2 == pytest.approx(h["affected_area"])
     assert np.isnan(arrival).any()
     assert gm.run(short_fall(), out=tmp_path / "plane").maps == {}
+
+
+def test_a_sweep_gives_each_runs_own_results_in_order(tmp_path, monkeypatch):
+    # each row is what the same run gives alone, to the bit, in the order of the values; a
+    # refused value is refused before anything runs
+    path, values = "boundaries.ground.friction", [0.4, 0.2]
+    table = gm.sweep("sliding_inclined", path, values, processes=2)
+    rows = table.to_dict("list") if hasattr(table, "to_dict") else table
+    assert list(rows["value"]) == values
+    for value, front in zip(values, rows["front_x"]):
+        alone = gm.run(gm.Scene.embedded("sliding_inclined").set(path, value)).summary
+        assert front == alone["runout"]["front_x"]
+    with pytest.raises(gm.SceneError):
+        gm.sweep("sliding_inclined", path, [0.3, -1.0])
+    # a scene travels to a worker process with its files' folder: the valley's DEM is found
+    # from another working directory
+    import pickle
+
+    valley = gm.Scene.from_file(EXAMPLES / "valley_landslide.toml")
+    monkeypatch.chdir(tmp_path)
+    again = pickle.loads(pickle.dumps(valley))
+    assert again.text == valley.text and again.particle_count == valley.particle_count

@@ -102,6 +102,30 @@ impl AnyScene {
         })
     }
 
+    /// validates a scene text whose named files (DEMs, rasters, polylines) are relative to
+    /// `dir`: a scene carried elsewhere (another process) as its text and
+    /// [`AnyScene::files_dir`].
+    pub fn from_str_in(
+        text: &str,
+        origin: &str,
+        dir: &std::path::Path,
+    ) -> Result<AnyScene, SceneError> {
+        Ok(if declared_dimension(text) == 3 {
+            AnyScene::Space(Box::new(load_space_str_in(text, origin, dir)?))
+        } else {
+            AnyScene::Plane(Box::new(load_scene_str_in(text, origin, dir)?))
+        })
+    }
+
+    /// the folder the scene's named files were found in (`None` for a scene that names none
+    /// from a file).
+    pub fn files_dir(&self) -> Option<&str> {
+        match self {
+            AnyScene::Plane(s) => s.files_dir(),
+            AnyScene::Space(s) => s.files_dir(),
+        }
+    }
+
     /// 2 or 3.
     pub fn dimension(&self) -> u8 {
         match self {

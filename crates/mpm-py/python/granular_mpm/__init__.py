@@ -49,6 +49,7 @@ __all__ = [
     "read_series",
     "read_frame",
     "read_raster",
+    "sweep",
     "__version__",
 ]
 
@@ -157,6 +158,10 @@ class Scene:
         self._native = self._native.without_value(path)
         return self
 
+    def __reduce__(self) -> Any:
+        # pickled as its text, origin and files folder: a scene travels to worker processes
+        return (_scene_from_parts, (self.text, self.origin, self._native.files_dir))
+
     def copy(self) -> "Scene":
         """An independent copy (to vary one scene in a loop)."""
         return Scene(self._native)
@@ -207,6 +212,12 @@ class Scene:
 
     def __repr__(self) -> str:
         return repr(self._native)
+
+
+def _scene_from_parts(text: str, origin: str, files_dir: Optional[str]) -> Scene:
+    if files_dir is None:
+        return Scene(_native.Scene.from_str(text, origin))
+    return Scene(_native.Scene.from_str_in(text, origin, files_dir))
 
 
 def read_series(path: PathLike) -> Dict[str, np.ndarray]:
@@ -523,6 +534,63 @@ def _threads(threads: Optional[int]) -> Optional[int]:
             "per core"
         )
     return int(threads)
+
+
+def _sweep_one(scene: Scene, path: str, value: Any, threads: int) -> Dict[str, Any]:
+    """One run of a sweep (in a worker process): the value and the summary's scalars."""
+    scene = scene.copy().set(path, value)
+    s = run(scene, threads=threads).summary
+    row: Dict[str, Any] = {"value": value, "status": s["status"], "steps": s["steps"]}
+    row["simulated_time"] = s["simulated_time"]
+    for key, v in (s.get("runout") or {}).items():
+        if isinstance(v, (int, float)) or v is None:
+            row[key] = v
+    return row
+
+
+def sweep(
+    scene: Union[Scene, str, PathLike],
+    path: str,
+    values: Sequence[Any],
+    processes: Optional[int] = None,
+    threads: int = 1,
+) -> Any:
+    """Runs ``scene`` once per value of the field ``path`` and returns one table: a row per
+    value, in their order, with ``value``, ``status``, ``steps``, ``simulated_time`` and the
+    summary's runout indicators (``travel_angle_deg``, ``com_travel_angle_deg``, ``front_x``,
+    ``com_travel``, ``stop_time``, ...; ``None`` where a run has none) — a pandas DataFrame
+    when pandas is installed, else a dict of lists.
+
+    Each run is a process of its own, ``processes`` at a time (default: the cores over
+    ``threads``), each with ``threads`` solver threads; every value is checked before any runs
+    (a refused one raises :class:`SceneError` naming it). A run's results are the bits the same
+    run gives alone.
+
+    >>> table = sweep("sliding_inclined", "boundaries.ground.friction", [0.2, 0.3])
+    """
+    base = _as_scene(scene)
+    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence):
+        raise ValueError("values: give a list of the field's values, e.g. [20.0, 25.0, 30.0]")
+    for v in values:
+        base.copy().set(path, v)  # refused here, before any run
+    workers = processes if processes is not None else max(1, (os.cpu_count() or 1) // threads)
+    if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1:
+        raise ValueError(f"processes = {processes!r}: give a whole number of processes, 1 or more")
+    _threads(threads)
+    from concurrent.futures import ProcessPoolExecutor
+
+    n = len(values)
+    with ProcessPoolExecutor(max_workers=min(int(workers), max(n, 1))) as pool:
+        rows = list(pool.map(_sweep_one, [base] * n, [path] * n, list(values), [threads] * n))
+    keys: List[str] = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    columns = {k: [r.get(k) for r in rows] for k in keys}
+    try:
+        import pandas as pd  # type: ignore
+    except ImportError:
+        return columns
+    return pd.DataFrame(columns)
 
 
 def _as_scene(scene: Union[Scene, str, PathLike]) -> Scene:
