@@ -339,3 +339,19 @@ def test_a_sweep_gives_each_runs_own_results_in_order(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     again = pickle.loads(pickle.dumps(valley))
     assert again.text == valley.text and again.particle_count == valley.particle_count
+
+
+def test_series_at_common_times_interpolate_between_the_rows_around_them():
+    # on a row's own time the row itself; halfway between two rows their mean (linear
+    # interpolation, 1e-12: rounding); beyond the series' span refused
+    r = gm.run(short_fall())
+    s = r.series("runout")
+    t = s["time"]
+    mid = 0.5 * (t[3] + t[4])
+    at = r.series_at("runout", [t[2], mid])
+    assert at["com_y"][0] == s["com_y"][2]
+    assert at["com_y"][1] == pytest.approx(0.5 * (s["com_y"][3] + s["com_y"][4]), rel=1e-12)
+    with pytest.raises(ValueError, match="beyond"):
+        r.series_at("runout", [t[-1] + 1.0])
+    with pytest.raises(ValueError, match="no 'walls2'"):
+        r.series_at("walls2", [0.0])

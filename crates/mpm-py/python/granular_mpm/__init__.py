@@ -354,6 +354,24 @@ class Result:
         """A series as a dict of NumPy arrays (whether or not pandas is installed)."""
         return self._series.get(name)
 
+    def series_at(self, name: str, times: Sequence[float]) -> Dict[str, np.ndarray]:
+        """Series ``name`` on the given ``times`` (s), each column interpolated linearly between
+        the two rows around each time: the rows fall on step times (within a step of the
+        ``series_interval`` marks), so runs of a sweep line up on common times this way. A time
+        outside the series' span is refused."""
+        s = self._series.get(name)
+        if s is None:
+            raise ValueError(f"the run has no {name!r} series (`{name}.csv`)")
+        t = np.asarray(times, dtype=float)
+        if t.ndim != 1 or not np.all(np.isfinite(t)):
+            raise ValueError("times: give a list of finite times (s)")
+        span = s["time"]
+        if t.size and (t.min() < span[0] or t.max() > span[-1]):
+            raise ValueError(
+                f"times: {t.min()}–{t.max()} s reaches beyond the series' {span[0]}–{span[-1]} s"
+            )
+        return {k: (t if k == "time" else np.interp(t, span, v)) for k, v in s.items()}
+
     def _get(self, name: str) -> Any:
         s = self._series.get(name)
         return None if s is None else _frame(s)
