@@ -355,3 +355,13 @@ def test_series_at_common_times_interpolate_between_the_rows_around_them():
         r.series_at("runout", [t[-1] + 1.0])
     with pytest.raises(ValueError, match="no 'walls2'"):
         r.series_at("walls2", [0.0])
+
+
+def test_a_sweep_takes_an_array_and_checks_its_arguments_first():
+    with pytest.raises(ValueError, match="threads"):
+        gm.sweep("free_fall", "solver.end_time", [0.01], threads=0)
+    table = gm.sweep("free_fall", "solver.end_time", np.array([0.01, 0.02]), processes=1)
+    rows = table.to_dict("list") if hasattr(table, "to_dict") else table
+    assert list(rows["value"]) == [0.01, 0.02] and list(rows["status"]) == ["completed"] * 2
+    with pytest.raises(gm.SceneError, match="did you mean `flume`"):
+        gm.run("flum")

@@ -140,6 +140,8 @@ pub(crate) fn setup_error(origin: &str, message: &str) -> RunError {
 /// [`RunError::Solver`] after writing the files reached so far (including a frame of the
 /// failing state and the summary with the error).
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    // the arguments before the folder: a refused one leaves an earlier run's files as they are
+    crate::options::available_threads(opts.threads)?;
     // Held until the run returns: a second run into the directory is refused meanwhile.
     let _lock = match &opts.out_dir {
         Some(dir) => {
@@ -211,6 +213,7 @@ const SUMMARY_LIMIT: u64 = 16 << 20;
 /// summary is returned and nothing is written. (From an earlier checkpoint, the run is run again
 /// from there, to the same bits.)
 pub fn resume(dir: &Path, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    crate::options::available_threads(opts.threads)?;
     let path = dir.join(checkpoint::FILE_NAME);
     if !path.exists() {
         return Err(RunError::Output(OutputError::Checkpoint {

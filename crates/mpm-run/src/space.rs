@@ -154,6 +154,8 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
 /// after a step with a checkpoint that `mpm resume` continues). Returns the summary of a completed, stopped or interrupted run; a
 /// solver instability returns [`RunError::Solver`] after writing the files reached so far.
 pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    // the arguments before the folder: a refused one leaves an earlier run's files as they are
+    crate::options::available_threads(opts.threads)?;
     let _lock = match &opts.out_dir {
         Some(dir) => {
             let lock = prepare_dir(dir, opts.force)?;

@@ -583,8 +583,20 @@ fn a_thread_count_of_zero_and_a_time_already_passed_are_refused() {
         assert!(e.contains(&format!("threads = {bad}")), "{e}");
     }
     let scene = load_scene_str(mpm_run::embedded_scene("free_fall").unwrap(), "free_fall").unwrap();
-    let zero = RunOptions { threads: Some(0), ..Default::default() };
+    // refused before the output folder is touched: with force, an earlier run's files stay
+    let dir = std::env::temp_dir().join(format!("mpm-threads0-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("energy.csv"), "earlier run").unwrap();
+    let zero = RunOptions {
+        threads: Some(0),
+        out_dir: Some(dir.clone()),
+        force: true,
+        ..Default::default()
+    };
     assert!(matches!(run_scene(&scene, &zero), Err(RunError::Arguments(_))));
+    assert_eq!(std::fs::read_to_string(dir.join("energy.csv")).unwrap(), "earlier run");
+    assert!(matches!(resume(&dir, &zero), Err(RunError::Arguments(_))));
+    std::fs::remove_dir_all(&dir).unwrap();
     assert!(Simulation::new(&scene, Some(0), &mut || false).is_err());
     let mut sim = Simulation::new(&scene, None, &mut || false).unwrap();
     sim.advance(Limit::Steps(3), &mut || false).unwrap();

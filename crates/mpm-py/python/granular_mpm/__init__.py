@@ -297,23 +297,23 @@ def read_raster(path: PathLike) -> Tuple[np.ndarray, Dict[str, float]]:
     georeference has ``xllcorner``, ``yllcorner`` (the lower-left corner, map units) and
     ``cellsize``. Cell (r, c) is centred at x = xllcorner + (c + ½)·cellsize,
     y = yllcorner + (nrows − r − ½)·cellsize."""
+    keys = ("ncols", "nrows", "xllcorner", "yllcorner", "cellsize", "nodata_value")
     header: Dict[str, float] = {}
-    rows: List[List[float]] = []
     with open(path, encoding="utf-8") as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0][0].isalpha():
-                header[parts[0].lower()] = float(parts[1])
-            else:
-                rows.append([float(v) for v in parts])
-    for key in ("ncols", "nrows", "xllcorner", "yllcorner", "cellsize"):
+        tokens = f.read().split()
+    at = 0
+    # the header's known keys, then every value whatever the lines (NaN and inf read as such)
+    while at + 1 < len(tokens) and tokens[at].lower() in keys:
+        header[tokens[at].lower()] = float(tokens[at + 1])
+        at += 2
+    for key in keys[:5]:
         if key not in header:
             raise ValueError(f"{path}: not an ESRI ASCII grid (no {key})")
-    values = np.array(rows, dtype=float)
-    if values.shape != (int(header["nrows"]), int(header["ncols"])):
-        raise ValueError(f"{path}: {values.shape} values against the header's nrows × ncols")
+    shape = (int(header["nrows"]), int(header["ncols"]))
+    values = np.array([float(v) for v in tokens[at:]], dtype=float)
+    if values.size != shape[0] * shape[1]:
+        raise ValueError(f"{path}: {values.size} values against the header's nrows × ncols")
+    values = values.reshape(shape)
     if "nodata_value" in header:
         values[values == header["nodata_value"]] = np.nan
     geo = {k: header[k] for k in ("xllcorner", "yllcorner", "cellsize")}
@@ -557,8 +557,18 @@ def _threads(threads: Optional[int]) -> Optional[int]:
 def _sweep_one(scene: Scene, path: str, value: Any, threads: int) -> Dict[str, Any]:
     """One run of a sweep (in a worker process): the value and the summary's scalars."""
     scene = scene.copy().set(path, value)
-    s = run(scene, threads=threads).summary
+    try:
+        s = run(scene, threads=threads).summary
+    except SolverError as e:
+        # one run's instability is that row's result: the others are kept
+        s = json.loads(getattr(e, "summary_json", "") or "{}")
+        s.setdefault("steps", None)
+        s.setdefault("simulated_time", None)
+        s["status"] = "failed"
+        s["error"] = str(e)
     row: Dict[str, Any] = {"value": value, "status": s["status"], "steps": s["steps"]}
+    if "error" in s:
+        row["error"] = s["error"]
     row["simulated_time"] = s["simulated_time"]
     for key, v in (s.get("runout") or {}).items():
         if isinstance(v, (int, float)) or v is None:
@@ -582,19 +592,26 @@ def sweep(
     Each run is a process of its own, ``processes`` at a time (default: the cores over
     ``threads``), each with ``threads`` solver threads; every value is checked before any runs
     (a refused one raises :class:`SceneError` naming it). A run's results are the bits the same
-    run gives alone.
+    run gives alone; a run the solver stops has status ``"failed"`` and its ``error``, and the
+    other rows stand. ``values`` is a list or a NumPy array. The workers are processes: where
+    Python starts them afresh (macOS, Windows), call ``sweep`` under
+    ``if __name__ == "__main__":``.
 
     >>> table = sweep("sliding_inclined", "boundaries.ground.friction", [0.2, 0.3])
     """
+    threads = _threads(threads) or 1
     base = _as_scene(scene)
-    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence):
+    if isinstance(values, (str, bytes, dict)):
+        raise ValueError("values: give a list of the field's values, e.g. [20.0, 25.0, 30.0]")
+    try:
+        values = [v.item() if isinstance(v, np.generic) else v for v in values]
+    except TypeError:
         raise ValueError("values: give a list of the field's values, e.g. [20.0, 25.0, 30.0]")
     for v in values:
         base.copy().set(path, v)  # refused here, before any run
     workers = processes if processes is not None else max(1, (os.cpu_count() or 1) // threads)
     if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1:
         raise ValueError(f"processes = {processes!r}: give a whole number of processes, 1 or more")
-    _threads(threads)
     from concurrent.futures import ProcessPoolExecutor
 
     n = len(values)
@@ -615,8 +632,15 @@ def _as_scene(scene: Union[Scene, str, PathLike]) -> Scene:
     if isinstance(scene, Scene):
         return scene
     name = os.fspath(scene)
-    if not os.path.exists(name) and name in scenes():
-        return Scene.embedded(name)
+    if not os.path.exists(name):
+        if name in scenes():
+            return Scene.embedded(name)
+        try:
+            Scene.embedded(name)
+        except SceneError as e:
+            # a mistyped embedded name, not a missing file: say which scene was meant
+            if getattr(e, "fix", "").startswith("`"):
+                raise
     return Scene.from_file(name)
 
 

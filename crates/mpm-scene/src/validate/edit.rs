@@ -117,7 +117,18 @@ pub(crate) fn value_at(
     let mut v: toml::Value = toml::from_str(text).map_err(|_| refuse("the scene's text"))?;
     for step in &steps {
         let next = match (step, v) {
-            (Step::Key(k), toml::Value::Table(mut t)) => t.remove(*k),
+            (Step::Key(k), toml::Value::Table(mut t)) => {
+                // absent, or mistyped: a key of a near name is what was meant
+                if !t.contains_key(*k) {
+                    if let Some(near) = near_name(k, t.keys().map(String::as_str)) {
+                        return Err(SceneError {
+                            problem: format!("the scene has no `{k}` here: did you mean `{near}`?"),
+                            ..refuse("")
+                        });
+                    }
+                }
+                t.remove(*k)
+            }
             (Step::Index(i), toml::Value::Array(mut a)) if *i < a.len() => Some(a.swap_remove(*i)),
             _ => None,
         };
@@ -274,6 +285,17 @@ fn set(item: &mut Item, steps: &[Step<'_>], value: Value) -> Result<(), String> 
     }
 }
 
+/// the one of `names` nearest to `k` (fewest edits) if near enough to be what was meant: at
+/// most a third of its characters (and at least one) changed.
+fn near_name<'a>(k: &str, names: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (k.chars().count() / 3).max(1);
+    names
+        .map(|name| (strsim::levenshtein(k, name), name))
+        .filter(|&(d, _)| d <= limit)
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, name)| name)
+}
+
 /// [`set`] under a table: the first step is a key of it.
 fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> Result<(), String> {
     let (first, rest) = steps.split_first().ok_or("an empty path")?;
@@ -293,14 +315,8 @@ fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> R
     // a missing table is created, unless the scene has one of a near name: a typo
     // (`materials.snd.friction_angle_deg`) would otherwise make a new material without a kind
     if !t.contains_key(k) {
-        let limit = (k.chars().count() / 3).max(1);
-        let near = t
-            .iter()
-            .filter(|(_, i)| i.is_table() || i.is_inline_table())
-            .map(|(name, _)| (strsim::levenshtein(k, name), name))
-            .filter(|&(d, _)| d <= limit)
-            .min_by_key(|&(d, _)| d);
-        if let Some((_, name)) = near {
+        let tables = t.iter().filter(|(_, i)| i.is_table() || i.is_inline_table());
+        if let Some(name) = near_name(k, tables.map(|(name, _)| name)) {
             return Err(format!(
                 "the scene has no table `{k}` here: did you mean `{name}`? (to add a table of \
                  that name, set it whole, e.g. `{k}` = {{ kind = ... }})"
@@ -398,6 +414,8 @@ mod tests {
             Some(toml::Value::Float(1.07))
         );
         assert_eq!(any.value_at("solver.dt").unwrap(), None);
+        let e = any.value_at("solver.courrant").unwrap_err();
+        assert!(e.problem.contains("did you mean `courant`?"), "{}", e.problem);
         assert_eq!(any.value_at("output.probes[7]").unwrap(), None);
         assert!(any.value_at("a..b").is_err());
     }
