@@ -254,7 +254,19 @@ fn edited(text: &str, origin: &str, path: &str, value: &str) -> Result<String, S
     })?;
     set(doc.as_item_mut(), &steps, new)
         .map_err(|why| refuse(why, "name a field of the scene format (docs/scene-format.md)"))?;
-    Ok(doc.to_string())
+    let text = doc.to_string();
+    // edits add up: the scene as a whole stays within the size a scene file may have
+    if text.len() as u64 > crate::limits::MAX_SCENE_BYTES {
+        return Err(refuse(
+            format!(
+                "the edited scene would be {} bytes, more than a scene may be ({} bytes)",
+                text.len(),
+                crate::limits::MAX_SCENE_BYTES
+            ),
+            "long outlines belong in fewer points (a polygon of at most 10 000 vertices)",
+        ));
+    }
+    Ok(text)
 }
 
 /// a TOML value written alone.
@@ -402,6 +414,17 @@ mod tests {
             let e = f.without_value(path).unwrap_err();
             assert!(e.problem.contains(why) && e.path == path, "{path}: {}", e.problem);
         }
+    }
+
+    /// Edits add up to at most the size of a scene file: two values each under the limit are
+    /// refused once their sum is over it (R3-10: Python's `set` made a 12 MB scene).
+    #[test]
+    fn edits_that_grow_a_scene_past_the_file_limit_are_refused() {
+        let half = crate::limits::MAX_SCENE_BYTES as usize / 2 + 10;
+        let title = format!("\"{}\"", "x".repeat(half));
+        let once = flume().with_value("title", &title).unwrap();
+        let e = once.with_value("grid.title_again", &title).unwrap_err();
+        assert!(e.problem.contains("more than a scene may be"), "{}", e.problem);
     }
 
     /// `value_at` reads what the text gives, and `None` where a default applies.
