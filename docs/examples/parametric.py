@@ -1,7 +1,7 @@
 """A parametric study: the valley landslide's travel angle against its basal friction angle.
 
-Each angle is one run in its own process (a process pool over the cores, one solver thread
-each); the summaries give the travel angle (the source's top to the deposit's farthest point),
+Each angle is one run in its own process (`granular_mpm.sweep`: a process pool over the cores,
+one solver thread each); the summaries give the travel angle (the source's top to the deposit's farthest point),
 the runout and the stop time, and the script plots the travel angle against the friction angle
 with the 1:1 line a frictional block would follow (the numbers beside it, as CSV).
 
@@ -13,9 +13,7 @@ with the 1:1 line a frictional block would follow (the numbers beside it, as CSV
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import granular_mpm as gm
@@ -23,22 +21,13 @@ import granular_mpm as gm
 HERE = Path(__file__).resolve().parent
 
 
-def one(angle: float, quick: bool) -> dict:
-    """One run at basal friction `angle` (degrees): its runout indicators."""
+def valley(quick: bool) -> gm.Scene:
+    """The valley example, writing only what the sweep reads (no frames or plots)."""
     scene = gm.Scene.from_file(HERE / "valley_landslide.toml")
     if quick:
         scene.set("grid.cell_width", 5.0).set("grid.row_height", 2.5).set("grid.rows", 16)
         scene.set("solver.end_time", 45.0)
-    scene.set("output.interval", scene.end_time).set("output.plots", False)
-    scene.set("boundaries.ground", {"friction_angle_deg": angle})
-    r = gm.run(scene, threads=1).summary["runout"]
-    return {
-        "angle": angle,
-        "travel_angle": r["travel_angle_deg"],
-        "com_travel_angle": r["com_travel_angle_deg"],
-        "front_x": r["front_x"],
-        "stop_time": r["stop_time"],
-    }
+    return scene.set("output.interval", scene.end_time).set("output.plots", False)
 
 
 def main() -> int:
@@ -47,8 +36,18 @@ def main() -> int:
     parser.add_argument("--out", default="parametric.png", help="the plot (PNG)")
     args = parser.parse_args()
     angles = [20.0, 25.0, 30.0] if args.quick else [18.0, 20.0, 22.0, 24.0, 26.0, 28.0, 30.0]
-    with ProcessPoolExecutor(max_workers=os.cpu_count()) as pool:
-        rows = list(pool.map(one, angles, [args.quick] * len(angles)))
+    table = gm.sweep(valley(args.quick), "boundaries.ground.friction_angle_deg", angles)
+    columns = table.to_dict("list") if hasattr(table, "to_dict") else table
+    rows = [
+        {
+            "angle": columns["value"][i],
+            "travel_angle": columns["travel_angle_deg"][i],
+            "com_travel_angle": columns["com_travel_angle_deg"][i],
+            "front_x": columns["front_x"][i],
+            "stop_time": columns["stop_time"][i],
+        }
+        for i in range(len(angles))
+    ]
     print(" basal φ   travel angle   centre of mass   front (m)   stops (s)")
     for r in rows:
         stop = "-" if r["stop_time"] is None else f"{r['stop_time']:.1f}"
