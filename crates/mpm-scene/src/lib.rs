@@ -42,6 +42,7 @@ mod ground;
 pub mod inputs;
 pub mod limits;
 pub mod materials;
+mod names;
 pub mod observed;
 pub mod plan;
 pub mod presets;

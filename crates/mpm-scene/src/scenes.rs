@@ -22,13 +22,7 @@ pub fn embedded_scene(name: &str) -> Option<&'static str> {
 /// the embedded scene whose name is nearest to `name` (fewest edits), if it is near enough to
 /// be what was meant: at most a third of the name's characters (and at least one) changed.
 pub fn nearest_scene(name: &str) -> Option<&'static str> {
-    let limit = (name.chars().count() / 3).max(1);
-    SCENES
-        .iter()
-        .map(|(n, _)| (strsim::levenshtein(name, n), *n))
-        .filter(|&(d, _)| d <= limit)
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, n)| n)
+    crate::names::nearest(name, SCENES.iter().map(|(n, _)| *n))
 }
 
 /// the refusal of an unknown embedded scene's name: the nearest name if one is near, and the

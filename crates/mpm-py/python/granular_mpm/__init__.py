@@ -406,16 +406,20 @@ class Result:
         """Normal and shear load on each boundary over time (``walls.csv``)."""
         return self._get("walls")
 
+    def _kept(self, what: str) -> Path:
+        """The run's folder, which holds its ``what``; refused for a temporary one."""
+        if self.out is None:
+            raise ValueError(
+                f"the run wrote into a temporary folder, removed with its {what}: run it with "
+                "out=FOLDER to keep them"
+            )
+        return self.out
+
     @property
     def frames(self) -> List[Tuple[float, Path]]:
         """The particle frames as (time, path), from ``particles.pvd`` (empty when the scene
         wrote none). Needs a run with ``out``: a temporary folder is gone with its frames."""
-        if self.out is None:
-            raise ValueError(
-                "the run wrote into a temporary folder, removed with its frames: run it with "
-                "out=FOLDER to keep them"
-            )
-        pvd = self.out / "particles.pvd"
+        pvd = self._kept("frames") / "particles.pvd"
         if not pvd.is_file():
             return []
         text = pvd.read_text(encoding="utf-8")
@@ -427,12 +431,7 @@ class Result:
         """A 3D run's hazard maps (``maps/*.asc``: ``max_height``, ``max_speed``,
         ``arrival_time``, ``deposit_depth``, ...) by name, each as (values, georeference)
         (:func:`read_raster`); empty for a 2D run. Needs a run with ``out``."""
-        if self.out is None:
-            raise ValueError(
-                "the run wrote into a temporary folder, removed with its maps: run it with "
-                "out=FOLDER to keep them"
-            )
-        folder = self.out / "maps"
+        folder = self._kept("maps") / "maps"
         if not folder.is_dir():
             return {}
         return {p.stem: read_raster(p) for p in sorted(folder.glob("*.asc"))}

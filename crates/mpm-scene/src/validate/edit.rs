@@ -60,21 +60,21 @@ impl Scene {
     /// ```
     pub fn with_value(&self, path: &str, value: &str) -> Result<Scene, SceneError> {
         let text = edited(&self.text, &self.origin, path, value)?;
-        let origin = format!("{} (with {path} = {value})", self.origin);
-        load(&text, &origin, self.files_base()).map(|mut scene| {
-            scene.origin = self.origin.clone();
-            scene
-        })
+        self.reloaded(&text, &format!("with {path} = {value}"))
     }
-}
 
-impl Scene {
     /// the same scene without the field at `path` (its default then applies), validated again:
     /// e.g. `solver.courant` removed before `solver.dt` is set.
     pub fn without_value(&self, path: &str) -> Result<Scene, SceneError> {
         let text = removed(&self.text, &self.origin, path)?;
-        let origin = format!("{} (without {path})", self.origin);
-        load(&text, &origin, self.files_base()).map(|mut scene| {
+        self.reloaded(&text, &format!("without {path}"))
+    }
+
+    /// the edited `text` validated as a whole, its refusals naming the `change`; it keeps this
+    /// scene's origin and finds its files where this one found them.
+    fn reloaded(&self, text: &str, change: &str) -> Result<Scene, SceneError> {
+        let origin = format!("{} ({change})", self.origin);
+        load(text, &origin, self.files_base()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })
@@ -86,8 +86,13 @@ impl SpaceScene {
     /// [`Scene::without_value`]).
     pub fn without_value(&self, path: &str) -> Result<SpaceScene, SceneError> {
         let text = removed(&self.text, &self.origin, path)?;
-        let origin = format!("{} (without {path})", self.origin);
-        load_space(&text, &origin, self.files_base()).map(|mut scene| {
+        self.reloaded(&text, &format!("without {path}"))
+    }
+
+    /// [`Scene::reloaded`] for a 3D scene.
+    fn reloaded(&self, text: &str, change: &str) -> Result<SpaceScene, SceneError> {
+        let origin = format!("{} ({change})", self.origin);
+        load_space(text, &origin, self.files_base()).map(|mut scene| {
             scene.origin = self.origin.clone();
             scene
         })
@@ -120,7 +125,7 @@ pub(crate) fn value_at(
             (Step::Key(k), toml::Value::Table(mut t)) => {
                 // absent, or mistyped: a key of a near name is what was meant
                 if !t.contains_key(*k) {
-                    if let Some(near) = near_name(k, t.keys().map(String::as_str)) {
+                    if let Some(near) = crate::names::nearest(k, t.keys().map(String::as_str)) {
                         return Err(SceneError {
                             problem: format!("the scene has no `{k}` here: did you mean `{near}`?"),
                             ..refuse("")
@@ -208,11 +213,7 @@ impl SpaceScene {
     /// [`Scene::with_value`]).
     pub fn with_value(&self, path: &str, value: &str) -> Result<SpaceScene, SceneError> {
         let text = edited(&self.text, &self.origin, path, value)?;
-        let origin = format!("{} (with {path} = {value})", self.origin);
-        load_space(&text, &origin, self.files_base()).map(|mut scene| {
-            scene.origin = self.origin.clone();
-            scene
-        })
+        self.reloaded(&text, &format!("with {path} = {value}"))
     }
 }
 
@@ -297,17 +298,6 @@ fn set(item: &mut Item, steps: &[Step<'_>], value: Value) -> Result<(), String> 
     }
 }
 
-/// the one of `names` nearest to `k` (fewest edits) if near enough to be what was meant: at
-/// most a third of its characters (and at least one) changed.
-fn near_name<'a>(k: &str, names: impl Iterator<Item = &'a str>) -> Option<&'a str> {
-    let limit = (k.chars().count() / 3).max(1);
-    names
-        .map(|name| (strsim::levenshtein(k, name), name))
-        .filter(|&(d, _)| d <= limit)
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, name)| name)
-}
-
 /// [`set`] under a table: the first step is a key of it.
 fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> Result<(), String> {
     let (first, rest) = steps.split_first().ok_or("an empty path")?;
@@ -328,7 +318,7 @@ fn set_in_table(t: &mut toml_edit::Table, steps: &[Step<'_>], value: Value) -> R
     // (`materials.snd.friction_angle_deg`) would otherwise make a new material without a kind
     if !t.contains_key(k) {
         let tables = t.iter().filter(|(_, i)| i.is_table() || i.is_inline_table());
-        if let Some(name) = near_name(k, tables.map(|(name, _)| name)) {
+        if let Some(name) = crate::names::nearest(k, tables.map(|(name, _)| name)) {
             return Err(format!(
                 "the scene has no table `{k}` here: did you mean `{name}`? (to add a table of \
                  that name, set it whole, e.g. `{k}` = {{ kind = ... }})"
