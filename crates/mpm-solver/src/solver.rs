@@ -131,6 +131,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 initial_stored: f64::NAN,
                 reference_density: Vec::new(),
                 mass_scales: Vec::new(),
+                imposed: Vec::new(),
             },
         )
     }
@@ -240,6 +241,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 });
             }
         };
+        if checkpoint.imposed.iter().any(|(_, m)| !m.is_finite()) {
+            return Err(SolverError::InvalidSetting {
+                name: "checkpoint.imposed",
+                value: f64::NAN,
+                expected: "finite normals and directions of the constraints the boundaries imposed",
+            });
+        }
+        let mut scratch = Scratch::new();
+        scratch.imposed_before = checkpoint.imposed;
         let mut solver = Self {
             shape,
             materials,
@@ -256,7 +266,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             p_modulus,
             reference_density,
             signal_cap,
-            scratch: Scratch::new(),
+            scratch,
             last: StepReport {
                 step: checkpoint.step,
                 time: checkpoint.time,
@@ -296,6 +306,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             initial_stored: self.initial_stored,
             reference_density: self.reference_density.clone(),
             mass_scales: vec![self.small_mass, self.cell_mass],
+            imposed: self.scratch.imposed_before.clone(),
         }
     }
 
