@@ -80,7 +80,7 @@ pub use geostatic::{GeostaticReport, GeostaticSettings, NewtonIteration, SettleR
 pub use loads::{BoundaryLoad, SIDE_NAMES, SIDES};
 pub use math::{DIM, Matrix, Real, Stress, Vector};
 pub use particles::{NewParticle, Particles};
-pub use report::{BranchCounts, Checkpoint, Imposed, RunEnd, StepReport};
+pub use report::{BranchCounts, Checkpoint, RunEnd, StepReport};
 pub use setup::estimated_bytes;
 pub use signal::{StepLimit, displacement_dt, stable_dt};
 pub use solver::{END_SLACK, Observer, Solver, reached};

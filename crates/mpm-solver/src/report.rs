@@ -6,7 +6,7 @@ use mpm_constitutive::MAX_BRANCHES;
 use serde::{Deserialize, Serialize};
 
 use crate::energy::Dissipation;
-use crate::math::{Real, Vector};
+use crate::math::Real;
 use crate::particles::Particles;
 
 /// What one step did.
@@ -108,44 +108,4 @@ pub struct Checkpoint<St> {
     /// the scales it ran with.
     #[serde(default)]
     pub mass_scales: Vec<Real>,
-    /// What the boundaries imposed in the last step on the nodes they pressed on: the next
-    /// step's first strain update (USF, USAVG) imposes it again. Empty in a new run.
-    #[serde(default)]
-    pub imposed: Vec<(mpm_grid::NodeId, Imposed)>,
-}
-
-/// What a boundary's contact law imposed on a node in a step's grid solve (eqs 14–18), which the
-/// strain updates then impose on their own grid velocity at that node (`stages/grid.rs`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub enum Imposed {
-    /// nothing: no plane pressed on the node (the strain updates apply the normal constraint).
-    #[default]
-    Free,
-    /// stopped (friction held it, a rough or fixed plane, a corner): no velocity relative to
-    /// the planes.
-    Stuck,
-    /// slid on the face of this unit normal: no velocity along it, whichever way.
-    Face(Vector),
-    /// (3D) slid along the edge of two planes, of this unit direction: velocity along it only.
-    Edge(Vector),
-}
-
-impl Imposed {
-    /// `v` (relative to the planes) under this constraint.
-    pub fn on(self, v: Vector) -> Vector {
-        match self {
-            Imposed::Free => v,
-            Imposed::Stuck => Vector::ZERO,
-            Imposed::Face(n) => v - v.dot(n) * n,
-            Imposed::Edge(e) => v.dot(e) * e,
-        }
-    }
-
-    /// whether every vector it holds is finite.
-    pub fn is_finite(self) -> bool {
-        match self {
-            Imposed::Free | Imposed::Stuck => true,
-            Imposed::Face(v) | Imposed::Edge(v) => v.is_finite(),
-        }
-    }
 }

@@ -8,7 +8,7 @@ use mpm_grid::{ActiveNodes, NodeId};
 
 use crate::consistent::ConsistentScratch;
 use crate::math::{Real, Vector};
-use crate::report::Imposed;
+use crate::stages::grid::Imposed;
 
 /// the blocks whose patches overlap a block's nodes, its own excluded: 2^DIM − 1.
 pub(crate) const NEIGHBOURS: usize = (1 << crate::math::DIM) - 1;
@@ -208,15 +208,9 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// (node, plane normal) of every plane that pushed on a node in this step's grid solve
     /// (surface contact only): their particles take the normal velocity as in PIC.
     pub(crate) held: Vec<(u32, Vector)>,
-    /// What the boundaries imposed on each boundary node (`boundary[k]`) in the last grid solve,
-    /// for the strain updates (`stages/grid.rs`); valid for the active set of
-    /// `imposed_generation`.
+    /// What the boundaries imposed on each boundary node (`boundary[k]`) in this step's grid
+    /// solve, for the remap's strain field (`stages/grid.rs`).
     pub(crate) imposed: Vec<Imposed>,
-    /// The `active_generation` whose boundary list `imposed` follows (`u64::MAX`: none).
-    pub(crate) imposed_generation: u64,
-    /// The same, by node id, for the nodes a plane pressed on: what realigns `imposed` after
-    /// the active set changed, and what a checkpoint carries.
-    pub(crate) imposed_before: Vec<(NodeId, Imposed)>,
     /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
     pub(crate) corrections: Vec<(u32, Vector)>,
     /// Counts rebuilds of the active set (tables keyed on the set's numbering compare it).
@@ -271,8 +265,6 @@ impl<F, const N: usize> Scratch<F, N> {
             saved: Vec::new(),
             held: Vec::new(),
             imposed: Vec::new(),
-            imposed_generation: u64::MAX,
-            imposed_before: Vec::new(),
             corrections: Vec::new(),
             active_generation: 0,
             consistent: ConsistentScratch::new(),

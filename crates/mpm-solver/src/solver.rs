@@ -131,7 +131,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 initial_stored: f64::NAN,
                 reference_density: Vec::new(),
                 mass_scales: Vec::new(),
-                imposed: Vec::new(),
             },
         )
     }
@@ -241,15 +240,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 });
             }
         };
-        if checkpoint.imposed.iter().any(|(_, m)| !m.is_finite()) {
-            return Err(SolverError::InvalidSetting {
-                name: "checkpoint.imposed",
-                value: f64::NAN,
-                expected: "finite normals and directions of the constraints the boundaries imposed",
-            });
-        }
-        let mut scratch = Scratch::new();
-        scratch.imposed_before = checkpoint.imposed;
         let mut solver = Self {
             shape,
             materials,
@@ -266,7 +256,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             p_modulus,
             reference_density,
             signal_cap,
-            scratch,
+            scratch: Scratch::new(),
             last: StepReport {
                 step: checkpoint.step,
                 time: checkpoint.time,
@@ -306,7 +296,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             initial_stored: self.initial_stored,
             reference_density: self.reference_density.clone(),
             mass_scales: vec![self.small_mass, self.cell_mass],
-            imposed: self.scratch.imposed_before.clone(),
         }
     }
 
@@ -567,7 +556,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Scheme::Usf => {
                 self.p2g_mass_velocity();
                 self.consistent_transfer()?;
-                self.constrain_velocity();
+                self.constrain_velocity(false);
                 let counts = self.update_stress(dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
@@ -579,7 +568,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Scheme::Usavg => {
                 self.p2g_mass_velocity();
                 self.consistent_transfer()?;
-                self.constrain_velocity();
+                self.constrain_velocity(false);
                 self.update_stress(0.5 * dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
