@@ -705,6 +705,8 @@ checkpoint_interval = 2.5
         let (drop, kinetic, residual) = released(&dir);
         assert!(drop > 1e4, "{scheme}: the mass settles into its pocket: {drop} J released");
         assert!(residual < 0.01 * drop, "{scheme}: residual {residual} J, {drop} J released");
+        // (nor lost beyond a quarter of it without a ledger term)
+        assert!(residual > -0.25 * drop, "{scheme}: residual {residual} J, {drop} J released");
         assert!(kinetic < 0.01 * drop, "{scheme}: kinetic energy {kinetic} J at 5 s");
         if scheme == "usavg" {
             whole_usavg = Some((scene, whole));

@@ -333,6 +333,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// fed a slow growth of the kinetic energy in a column's deposit at rest (1.3e-6 of its peak
     /// at 10 s, 3.5e-6 at 16 s).
     pub(crate) fn constrain_velocity(&mut self, imposed: bool) {
+        debug_assert!(!imposed || self.scratch.imposed.len() == self.scratch.boundary.len());
         let sc = &mut self.scratch;
         sc.saved.clear();
         for b in &sc.boundary {
@@ -354,11 +355,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 None => Vector::ZERO,
             };
             let v = sc.velocity[i] - wall;
-            // (the remap follows this step's grid solve: `imposed` lists its boundary nodes)
-            sc.velocity[i] = match if imposed { sc.imposed[k] } else { Imposed::Free } {
-                Imposed::Free => constrain_velocity_all(planes, v),
-                m => m.on(v),
-            } + wall;
+            // (the remap follows this step's grid solve: `imposed` lists its boundary nodes; a
+            // face or an edge is then checked against the node's other planes, as the solve did)
+            let m = if imposed { sc.imposed[k] } else { Imposed::Free };
+            sc.velocity[i] = constrain_velocity_all(planes, m.on(v)) + wall;
         }
     }
 
@@ -375,7 +375,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
 /// remap's strain field then imposes on its own velocity at that node.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) enum Imposed {
-    /// nothing: no plane pressed on the node (the strain field takes the normal constraint).
+    /// nothing: no plane pressed on the node (or a ghost behind a fixed plane, mirrored instead).
     #[default]
     Free,
     /// stopped (friction held it, a rough or fixed plane, a corner): no velocity relative to
