@@ -230,8 +230,11 @@ pub fn rest_rows(table: &mut Table, dir: &std::path::Path) {
             let peak = rows.iter().map(|v| v[k]).fold(0.0, f64::max);
             let after = rows.iter().filter(|v| v[t] >= 5.0).map(|v| v[k]).fold(0.0, f64::max);
             let ratios = || rows.iter().filter(|v| v[d] > 0.0).map(|v| v[r] / v[d]);
-            let created = ratios().fold(0.0, f64::max);
-            let closure = ratios().map(f64::abs).fold(0.0, f64::max);
+            // (a NaN anywhere makes the largest NaN, which fails both rows: f64::max skips it)
+            let largest =
+                |a: f64, x: f64| if a.is_nan() || x.is_nan() { f64::NAN } else { a.max(x) };
+            let created = ratios().fold(0.0, largest);
+            let closure = ratios().map(f64::abs).fold(0.0, largest);
             Ok((summary, after / peak, created, closure))
         });
     match outcome {
