@@ -183,8 +183,7 @@ impl ContactOutcome {
 pub(crate) enum Law {
     /// the full law of a time step: Coulomb friction as configured.
     Step,
-    /// the velocity-only constraint of a strain field's grid velocity (a MUSL remap, USF's start
-    /// of step): Coulomb boundaries act as rollers.
+    /// the velocity-only constraint after a MUSL remap: Coulomb boundaries act as rollers.
     VelocityOnly,
 }
 
@@ -375,8 +374,7 @@ impl Boundary {
         }
     }
 
-    /// The velocity-only constraint of a strain field's grid velocity (eq 18; the solver applies it
-    /// after a MUSL remap on top of what the step's law imposed there): removes an inward normal velocity
+    /// The velocity-only constraint used after a MUSL remap (eq 18): removes an inward normal velocity
     /// (and the tangential one for `Rough`, and everything for `Fixed`); leaves a separating node
     /// untouched. No friction is applied: the step's friction was already applied by
     /// [`Boundary::apply`], and applying it again to the remapped velocity would count it twice.

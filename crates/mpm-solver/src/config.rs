@@ -126,8 +126,7 @@ pub enum Contact {
     /// The paper's rule (§2(4)): every node on a plane is held, whatever the gap between the
     /// material and the plane, and the impulse reaches the particles as a FLIP increment. A body
     /// is stopped up to one cell above the plane, and a block dropped on a frictionless floor
-    /// gains 13 % energy at C = 0.1 under USF, 1.2–1.3 % under MUSL and USAVG, whose remap imposes
-    /// what the contact imposed, and 0.7 % under USL (first order in Δt).
+    /// gains 12–13 % energy at C = 0.1 under MUSL, USF and USAVG (first order in Δt).
     Node,
 }
 

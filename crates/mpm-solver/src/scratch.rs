@@ -8,7 +8,6 @@ use mpm_grid::{ActiveNodes, NodeId};
 
 use crate::consistent::ConsistentScratch;
 use crate::math::{Real, Vector};
-use crate::stages::grid::Imposed;
 
 /// the blocks whose patches overlap a block's nodes, its own excluded: 2^DIM − 1.
 pub(crate) const NEIGHBOURS: usize = (1 << crate::math::DIM) - 1;
@@ -208,9 +207,6 @@ pub(crate) struct Scratch<F, const N: usize> {
     /// (node, plane normal) of every plane that pushed on a node in this step's grid solve
     /// (surface contact only): their particles take the normal velocity as in PIC.
     pub(crate) held: Vec<(u32, Vector)>,
-    /// What the boundaries imposed on each boundary node (`boundary[k]`) in this step's grid
-    /// solve, for the remap's strain field (`stages/grid.rs`).
-    pub(crate) imposed: Vec<Imposed>,
     /// (particle, velocity change) of the PIC normal correction, gathered before it is applied.
     pub(crate) corrections: Vec<(u32, Vector)>,
     /// Counts rebuilds of the active set (tables keyed on the set's numbering compare it).
@@ -264,7 +260,6 @@ impl<F, const N: usize> Scratch<F, N> {
             stencils_ahead: None,
             saved: Vec::new(),
             held: Vec::new(),
-            imposed: Vec::new(),
             corrections: Vec::new(),
             active_generation: 0,
             consistent: ConsistentScratch::new(),

@@ -556,7 +556,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Scheme::Usf => {
                 self.p2g_mass_velocity();
                 self.consistent_transfer()?;
-                self.constrain_velocity(false);
+                self.constrain_velocity();
                 let counts = self.update_stress(dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);
@@ -568,7 +568,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Scheme::Usavg => {
                 self.p2g_mass_velocity();
                 self.consistent_transfer()?;
-                self.constrain_velocity(false);
+                self.constrain_velocity();
                 self.update_stress(0.5 * dt, false)?;
                 self.unconstrain_velocity();
                 self.p2g_force(dt);

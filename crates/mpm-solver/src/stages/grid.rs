@@ -12,8 +12,7 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_contact::{
-    Boundary, Carriers, ContactOutcome, ContactStatus, Friction, apply_all, constrain_velocity_all,
-    impulse_shares,
+    Boundary, Carriers, ContactOutcome, Friction, apply_all, constrain_velocity_all, impulse_shares,
 };
 use mpm_grid::ShapeFunctions;
 use std::sync::atomic::Ordering;
@@ -153,14 +152,12 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         let surface = self.config.contact == Contact::Surface;
         let consistent = self.config.mass == MassMatrix::Consistent;
         sc.held.clear();
-        sc.imposed.clear();
-        sc.imposed.resize(sc.boundary.len(), Imposed::Free);
         sc.consistent.constrained.clear();
         sc.fixed_ghosts.clear();
         if !consistent {
             impulse += tie_fixed_ghosts(sc, loads, small, dt);
         }
-        for (k, b) in sc.boundary.iter().enumerate() {
+        for b in &sc.boundary {
             let i = b.node as usize;
             let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
             if planes.is_empty() {
@@ -200,7 +197,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             let out = apply_all(planes, sc.mass[i], v_rel, sc.acceleration[i], dt);
             // v^L = v_rel + a Δt + wall = v + a Δt: the identity still holds.
             sc.acceleration[i] = out.acceleration;
-            sc.imposed[k] = imposed_by(&out, planes);
             if surface {
                 // The PIC correction removes the normal velocity of the face the node ends on
                 // (its end velocity has no part along that normal), once: the two nearly parallel
@@ -319,28 +315,14 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// start from the velocity the particles actually carry, so that the contact's removal of an
     /// approach velocity reaches the particles through the FLIP update (eq 7). Otherwise the same
     /// approach velocity is stopped again at every step, and turned into strain energy each time.
-    ///
-    /// With `imposed` (the MUSL remap, after this step's grid solve), a node a plane pressed on
-    /// in that solve takes what the solve imposed there ([`Imposed`]) instead of the normal
-    /// constraint: where friction stopped a node, the remapped velocity (an average of its
-    /// particles' updated velocities) still slides, and the normal constraint keeps that slip.
-    /// The strain field then shears the material against a ground it did not move on, and the
-    /// stress built from that motion does work that never happened. On a release cut 1.5 m
-    /// deep over 1 m plan cells with two particles per cell, an elastic mass that should settle
-    /// gained 2.3 MJ in 10 s under USAVG and rose 8 cm (hostile3 R3-05). The first update of
-    /// USF and USAVG, before the step's grid solve, keeps the normal constraint: the last step's
-    /// constraints imposed on the new start-of-step velocity (tried) settled that mass too, but
-    /// fed a slow growth of the kinetic energy in a column's deposit at rest (1.3e-6 of its peak
-    /// at 10 s, 3.5e-6 at 16 s).
-    pub(crate) fn constrain_velocity(&mut self, imposed: bool) {
-        debug_assert!(!imposed || self.scratch.imposed.len() == self.scratch.boundary.len());
+    pub(crate) fn constrain_velocity(&mut self) {
         let sc = &mut self.scratch;
         sc.saved.clear();
         for b in &sc.boundary {
             let i = b.node as usize;
             sc.saved.push(sc.velocity[i]);
         }
-        for (k, b) in sc.boundary.iter().enumerate() {
+        for b in &sc.boundary {
             let i = b.node as usize;
             let planes = held_planes(&mut sc.plane_buf, &sc.node_planes[b.planes()]);
             if planes.is_empty() {
@@ -354,11 +336,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 Some(m) => m.wall_velocity(sc.velocity[m.image as usize]),
                 None => Vector::ZERO,
             };
-            let v = sc.velocity[i] - wall;
-            // (the remap follows this step's grid solve: `imposed` lists its boundary nodes; a
-            // face or an edge is then checked against the node's other planes, as the solve did)
-            let m = if imposed { sc.imposed[k] } else { Imposed::Free };
-            sc.velocity[i] = constrain_velocity_all(planes, m.on(v)) + wall;
+            sc.velocity[i] = constrain_velocity_all(planes, sc.velocity[i] - wall) + wall;
         }
     }
 
@@ -368,47 +346,6 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         for (b, &v) in sc.boundary.iter().zip(&sc.saved) {
             sc.velocity[b.node as usize] = v;
         }
-    }
-}
-
-/// What a boundary's contact law imposed on a node in a step's grid solve (eqs 14–18), which the
-/// remap's strain field then imposes on its own velocity at that node.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) enum Imposed {
-    /// nothing: no plane pressed on the node (or a ghost behind a fixed plane, mirrored instead).
-    #[default]
-    Free,
-    /// stopped (friction held it, a rough or fixed plane, a corner): no velocity relative to
-    /// the planes.
-    Stuck,
-    /// slid on the face of this unit normal: no velocity along it, whichever way.
-    Face(Vector),
-    /// (3D) slid along the edge of two planes, of this unit direction: velocity along it only.
-    Edge(Vector),
-}
-
-impl Imposed {
-    /// `v` (relative to the planes) under this constraint.
-    fn on(self, v: Vector) -> Vector {
-        match self {
-            Imposed::Free => v,
-            Imposed::Stuck => Vector::ZERO,
-            Imposed::Face(n) => v - v.dot(n) * n,
-            Imposed::Edge(e) => v.dot(e) * e,
-        }
-    }
-}
-
-/// what the contact law's outcome `out` imposed on a node held by `planes`.
-fn imposed_by(out: &ContactOutcome, planes: &[Boundary]) -> Imposed {
-    match (out.status, out.carriers) {
-        (ContactStatus::Sticking | ContactStatus::Fixed, _) => Imposed::Stuck,
-        (ContactStatus::Sliding, Carriers::One(k)) => Imposed::Face(planes[k].normal()),
-        // (3D) along the edge: the end velocity is its direction
-        (ContactStatus::Sliding, Carriers::Two(..)) => {
-            out.velocity.try_normalize().map_or(Imposed::Stuck, Imposed::Edge)
-        }
-        _ => Imposed::Free,
     }
 }
 

@@ -52,10 +52,8 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// MUSL remap (eq 8): v_i = Σ_p m_p v_p S_ip / m_i from the updated particle velocities, with the
-    /// old stencils, then the boundary velocity constraint (eq 18), or at the nodes a plane
-    /// pressed on in this step's grid solve what that solve imposed there
-    /// ([`Self::constrain_velocity`]). m_i is the step's P2G mass: the same sum over the same
-    /// stencils.
+    /// old stencils, then the boundary velocity constraint (eq 18). m_i is the step's P2G mass:
+    /// the same sum over the same stencils.
     /// With the consistent mass matrix the remapped velocity is its L2 projection
     /// (`stages/mass.rs`), whose failure is the only error.
     pub(crate) fn remap_velocity(&mut self, dt: Real) -> Result<(), SolverError> {
@@ -66,7 +64,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             Transfer::Apic => self.scatter::<false, true, false, true>(dt, Vector::ZERO),
         }
         self.project_velocity(Solve::Remap)?;
-        self.constrain_velocity(true);
+        self.constrain_velocity();
         Ok(())
     }
 
