@@ -272,7 +272,33 @@ pub(crate) fn slot(t: f64, interval: f64) -> u64 {
     (t / interval + SLOT_SLACK).floor().max(0.0) as u64
 }
 
+/// the next output time after `t` with `[output] exact_times` (the earliest of the next series
+/// row, frame and checkpoint marks; infinity without it): where a step must end so that each
+/// record falls on its mark.
+pub(crate) fn next_mark(t: f64, exact: bool, intervals: &[Option<f64>]) -> f64 {
+    if !exact {
+        return f64::INFINITY;
+    }
+    intervals.iter().flatten().map(|&i| (slot(t, i) + 1) as f64 * i).fold(f64::INFINITY, f64::min)
+}
+
+/// whether a step ending at `t` was shortened to land on a mark of `intervals` (with
+/// `exact_times`): such a step does not count as the run's smallest Δt.
+pub(crate) fn on_mark(t: f64, exact: bool, intervals: &[Option<f64>]) -> bool {
+    exact
+        && intervals.iter().flatten().any(|&i| {
+            let k = t / i;
+            (k - k.round()).abs() <= SLOT_SLACK
+        })
+}
+
 impl Driver<'_> {
+    /// the marks `[output] exact_times` lands on: series rows, frames, checkpoints.
+    fn marks(&self) -> [Option<f64>; 3] {
+        let o = &self.scene.resolved().output;
+        [Some(o.series_interval), Some(o.interval), o.checkpoint_interval]
+    }
+
     pub(crate) fn metrics<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         &self,
         solver: &Solver<M, S, N>,
@@ -605,9 +631,11 @@ impl Driver<'_> {
 impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for Driver<'_> {
     fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
         let r = self.scene.resolved();
+        let landed = on_mark(report.time, r.output.exact_times, &self.marks());
         let h = &mut self.history;
-        // The step that lands on the end time is shortened; it does not count as the smallest.
-        if !mpm_solver::reached(report.time, r.end_time) || h.dt_max == 0.0 {
+        // The step that lands on the end time (or on an output mark) is shortened; it does not
+        // count as the smallest.
+        if (!landed && !mpm_solver::reached(report.time, r.end_time)) || h.dt_max == 0.0 {
             h.dt_min = h.dt_min.min(report.dt);
         }
         h.dt_max = h.dt_max.max(report.dt);
@@ -655,6 +683,10 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
+    }
+
+    fn landing(&self, time: f64) -> f64 {
+        next_mark(time, self.scene.resolved().output.exact_times, &self.marks())
     }
 }
 

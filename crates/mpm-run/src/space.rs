@@ -35,7 +35,7 @@ use mpm_scene::summary::{
 use mpm_scene::{SavedState, SpaceGrid, SpaceScene, dispatch_space, fnv1a};
 use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport, Vector};
 
-use crate::driver::slot;
+use crate::driver::{next_mark, on_mark, slot};
 use crate::error::RunError;
 use crate::options::RunOptions;
 use crate::progress::ProgressSink;
@@ -901,7 +901,11 @@ impl<'a> SpaceDriver<'a> {
 impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for SpaceDriver<'_> {
     fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
         let scene = self.scene;
-        if !mpm_solver3d::reached(report.time, scene.end_time) || self.dt.max == 0.0 {
+        let o = &scene.output;
+        let marks = [Some(o.series_interval), Some(o.interval), o.checkpoint_interval];
+        let landed = on_mark(report.time, o.exact_times, &marks);
+        // (a step shortened to land on the end time or an output mark is not the smallest)
+        if (!landed && !mpm_solver3d::reached(report.time, scene.end_time)) || self.dt.max == 0.0 {
             self.dt.min = self.dt.min.min(report.dt);
         }
         self.dt.max = self.dt.max.max(report.dt);
@@ -948,6 +952,15 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
+    }
+
+    fn landing(&self, time: f64) -> f64 {
+        let o = &self.scene.output;
+        next_mark(
+            time,
+            o.exact_times,
+            &[Some(o.series_interval), Some(o.interval), o.checkpoint_interval],
+        )
     }
 }
 

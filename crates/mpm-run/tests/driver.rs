@@ -82,6 +82,70 @@ fn a_simulation_advanced_in_pieces_is_the_run_itself() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `[output] exact_times`: every series row and frame falls on its k·interval mark (to the
+/// slack the output's slots allow, 1e-9 of an interval: round-off of summed steps), in 2D and
+/// 3D; the run takes at most one extra step per mark; the shortened steps do not count as the
+/// smallest Δt (that stays the stability limit's, which a landing does not change: within 1 %);
+/// and a run stopped and resumed writes the bytes of one in one go.
+#[test]
+fn exact_times_put_every_record_on_its_mark_and_resume_to_the_same_bytes() {
+    let rows = |d: &std::path::Path, file: &str| -> Vec<f64> {
+        let text = std::fs::read_to_string(d.join(file)).unwrap();
+        text.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect()
+    };
+    let on_marks = |times: &[f64], interval: f64, what: &str| {
+        for (k, &t) in times.iter().enumerate() {
+            let mark = k as f64 * interval;
+            assert!((t - mark).abs() <= 1e-9 * interval, "{what}: row {k} at {t} s, not {mark} s");
+        }
+    };
+    let base = std::env::temp_dir().join(format!("mpm-exact-{}", std::process::id()));
+    // 2D: the flume's first 0.06 s, rows every 0.004 s, frames every 0.015 s
+    let text = mpm_run::embedded_scene("flume").unwrap();
+    let plain = load_scene_str(text, "flume")
+        .unwrap()
+        .modified(|f| {
+            f.solver.end_time = 0.06;
+            f.output.interval = Some(0.015);
+            f.output.series_interval = Some(0.004);
+            f.output.checkpoint_interval = None;
+        })
+        .unwrap();
+    let exact = plain.modified(|f| f.output.exact_times = Some(true)).unwrap();
+    let at = |name: &str| RunOptions { out_dir: Some(base.join(name)), ..Default::default() };
+    let loose = run_scene(&plain, &at("plain")).unwrap();
+    let whole = run_scene(&exact, &at("whole")).unwrap();
+    let times = rows(&base.join("whole"), "energy.csv");
+    assert_eq!(times.len(), 16, "rows at 0, 0.004, ..., 0.06 s");
+    on_marks(&times, 0.004, "2D energy.csv");
+    on_marks(&rows(&base.join("whole"), "runout.csv"), 0.004, "2D runout.csv");
+    assert_ne!(rows(&base.join("plain"), "energy.csv"), times, "without it rows fall on steps");
+    // (15 series marks and 4 frame marks, of which 3 coincide with series marks)
+    assert!(whole.steps > loose.steps && whole.steps <= loose.steps + 16, "{whole:?}");
+    assert!((whole.dt.min / loose.dt.min - 1.0).abs() < 0.01, "{:?} {:?}", whole.dt, loose.dt);
+    let stopped = run_scene(&exact, &RunOptions { stop_after: Some(0.025), ..at("part") }).unwrap();
+    assert_eq!(stopped.status, mpm_run::RunStatus::Interrupted);
+    let resumed = resume(&base.join("part"), &RunOptions::default()).unwrap();
+    assert_eq!(resumed.state_hash, whole.state_hash);
+    for file in ["energy.csv", "runout.csv"] {
+        let read = |d: &str| std::fs::read(base.join(d).join(file)).unwrap();
+        assert!(read("part") == read("whole"), "{file} after the resume differs");
+    }
+    // 3D: the sliding block, rows every 0.01 s, frames every 0.03 s
+    let text = BLOCK_3D.replace(
+        "interval = 0.03\n",
+        "interval = 0.03\nseries_interval = 0.01\nexact_times = true\n",
+    );
+    let scene = mpm_scene::load_space_str(&text, "block3d").unwrap();
+    assert!(scene.output.exact_times);
+    let s = mpm_run::run_space_scene(&scene, &at("space")).unwrap();
+    assert_eq!(s.status, mpm_scene::RunStatus::Completed);
+    let times = rows(&base.join("space"), "energy.csv");
+    assert_eq!(times.len(), 13, "rows at 0, 0.01, ..., 0.12 s");
+    on_marks(&times, 0.01, "3D energy.csv");
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
 /// A poll that asks to stop ends an advance after its current step, as Ctrl-C ends a run.
 #[test]
 fn a_poll_that_asks_to_stop_interrupts_after_a_step() {

@@ -612,6 +612,11 @@ pub struct OutputSpec {
     /// time between rows of the CSV time series (s), default min(interval, end_time / 200).
     #[serde(default)]
     pub series_interval: Option<f64>,
+    /// shorten the steps that would pass an output time (a series row, a frame, a checkpoint)
+    /// to end on it, so every record falls on its k·interval mark; default false (records at
+    /// the first step on or after each mark).
+    #[serde(default)]
+    pub exact_times: Option<bool>,
     /// VTK point-data fields, default all.
     #[serde(default)]
     pub fields: Option<Vec<VtkField>>,

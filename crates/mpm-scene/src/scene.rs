@@ -117,6 +117,8 @@ pub struct ResolvedOutput {
     pub interval: f64,
     /// simulated time between rows of the CSV series (s).
     pub series_interval: f64,
+    /// whether steps are shortened to end on every output mark (`exact_times`).
+    pub exact_times: bool,
     /// the point-data arrays of a frame.
     pub fields: Vec<VtkField>,
     /// whether frames are written.

@@ -140,6 +140,8 @@ pub struct SpaceOutput {
     pub interval: f64,
     /// simulated time between rows of the CSV series (s).
     pub series_interval: f64,
+    /// whether steps are shortened to end on every output mark (`exact_times`).
+    pub exact_times: bool,
     /// whether frames are written.
     pub vtk: bool,
     /// how frames store their arrays.

@@ -65,7 +65,7 @@ pub struct EnergyReport {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct DtStats {
     /// smallest Δt (the last, shortened step to land on the end time excluded when other steps
-    /// exist).
+    /// exist, and with `[output] exact_times` the steps shortened to land on an output mark).
     pub min: f64,
     /// largest Δt.
     pub max: f64,

@@ -50,6 +50,14 @@ pub fn reached(time: Real, end_time: Real) -> bool {
 pub trait Observer<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> {
     /// called after each completed step; `Break` stops the run.
     fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()>;
+
+    /// the next time after `time` that a step must end on: [`Solver::run_until`] shortens a step
+    /// that would pass it to end there (an output time, so that a record falls on it). The
+    /// default, infinity, lands on nothing but the end time.
+    fn landing(&self, time: Real) -> Real {
+        let _ = time;
+        Real::INFINITY
+    }
 }
 
 /// An observer that does nothing (runs to the end time).
@@ -699,7 +707,9 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         Ok(())
     }
 
-    /// steps until `end_time` (the last step is shortened to land on it) or until the observer stops.
+    /// steps until `end_time` (the last step is shortened to land on it) or until the observer
+    /// stops; a step that would pass the observer's [`Observer::landing`] time is shortened to end
+    /// on it too.
     pub fn run_until(
         &mut self,
         end_time: Real,
@@ -713,7 +723,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
                 self.time = end_time;
                 return Ok(RunEnd::EndTime);
             }
-            let report = self.step_capped(end_time - self.time)?;
+            // (an observer's landing at or before the clock would ask for no step: ignored)
+            let landing = observer.landing(self.time);
+            let target = if landing > self.time { end_time.min(landing) } else { end_time };
+            let report = self.step_capped(target - self.time)?;
             if observer.after_step(self, &report).is_break() {
                 return Ok(RunEnd::Stopped);
             }

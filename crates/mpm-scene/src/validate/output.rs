@@ -96,6 +96,7 @@ pub(super) fn build(
     Ok(ResolvedOutput {
         interval,
         series_interval,
+        exact_times: o.exact_times.unwrap_or(false),
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
         vtk: o.vtk.unwrap_or(true),
         vtk_format: o.vtk_format.unwrap_or_default(),

@@ -1297,8 +1297,8 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             path,
             None,
             "this output is not available in 3D scenes yet",
-            "interval, series_interval, checkpoint_interval, fields, vtk, vtk_format, plots, \
-             runout_direction, hazard_maps, observed",
+            "interval, series_interval, exact_times, checkpoint_interval, fields, vtk, \
+             vtk_format, plots, runout_direction, hazard_maps, observed",
             "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
              summary.json)",
         ));
@@ -1391,6 +1391,7 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
         observed,
         interval,
         series_interval,
+        exact_times: o.exact_times.unwrap_or(false),
         vtk: o.vtk.unwrap_or(true),
         vtk_format: o.vtk_format.unwrap_or_default(),
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
