@@ -363,6 +363,68 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
         Ok(())
     }
 
+    /// Sets every particle's velocity (m/s) between steps: a coupled code's or a script's
+    /// prescription. The change of kinetic energy, Σ_p ½ m_p (|v'_p|² − |v_p|²), is booked as
+    /// external work, so that the ledger's residual does not move; APIC's affine velocities are
+    /// kept. The next step's Δt is found from the new velocities.
+    ///
+    /// Refused, with nothing changed: another count than one velocity per particle (the value is
+    /// the count given), or a non-finite velocity (the value is its particle's index).
+    pub fn set_velocities(&mut self, velocities: &[Vector]) -> Result<(), SolverError> {
+        if velocities.len() != self.particles.len() {
+            return Err(SolverError::InvalidSetting {
+                name: "velocities",
+                value: velocities.len() as f64,
+                expected: "one velocity per particle",
+            });
+        }
+        if let Some(p) = velocities.iter().position(|v| !v.is_finite()) {
+            return Err(SolverError::InvalidSetting {
+                name: "velocities",
+                value: p as f64,
+                expected: "a finite velocity (m/s) for every particle; this is the first \
+                           particle without",
+            });
+        }
+        let before = par::sum(self.particles.len(), |i| self.kinetic_of(i));
+        self.particles.velocity.copy_from_slice(velocities);
+        let after = par::sum(self.particles.len(), |i| self.kinetic_of(i));
+        self.dissipation.external += after - before;
+        self.next_signal = None;
+        Ok(())
+    }
+
+    /// Replaces the materials' parameters between steps (a strength reduction, a parameter
+    /// changed by a coupled code): `materials` in the order of the present ones, each with the
+    /// state its particles carry (the same model). The particles keep their stresses and
+    /// states; a stress outside a new yield surface returns to it in the next step, where the
+    /// ledger books the plastic work. The change of stored elastic energy at the present
+    /// stresses (another stiffness) is booked as external work, so that the residual does not
+    /// move; the stability limit of Δt follows the new stiffness from the next step.
+    ///
+    /// Refused, with nothing changed: another number of materials (the value is the count
+    /// given).
+    pub fn set_materials(&mut self, materials: Vec<M>) -> Result<(), SolverError> {
+        if materials.len() != self.materials.len() {
+            return Err(SolverError::InvalidSetting {
+                name: "materials",
+                value: materials.len() as f64,
+                expected: "as many materials as the solver has",
+            });
+        }
+        let before = par::sum(self.particles.len(), |i| self.strain_of(i));
+        self.materials = materials;
+        self.p_modulus =
+            self.materials.iter().map(|m| m.p_wave_modulus(&m.initial_state())).collect();
+        self.signal_cap = (self.p_modulus.iter().zip(&self.reference_density))
+            .map(|(m, r)| signal_cap(*m, *r))
+            .collect();
+        let after = par::sum(self.particles.len(), |i| self.strain_of(i));
+        self.dissipation.external += after - before;
+        self.next_signal = None;
+        Ok(())
+    }
+
     /// removes the body force of [`Solver::set_body_force`]: gravity alone from the next step.
     pub fn clear_body_force(&mut self) {
         self.body_force = Vec::new();
@@ -924,5 +986,81 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(s.body_force, vec![Vector::X; 3]);
+    }
+
+    /// A stressed elastic block on a Coulomb floor under gravity, 16 particles, stepped `n` times.
+    fn settling_block(n: usize) -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
+        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+        let mut particles = Particles::default();
+        for k in 0..16 {
+            let x = Vector::new(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
+            let mut p = NewParticle::unstressed(x, Vector::new(0.2, -0.5), 0.015625, 1000.0, ());
+            p.stress.yy = -1e3 * x.y;
+            particles.push(p);
+        }
+        let config = SolverConfig {
+            gravity: Vector::new(0.0, -9.81),
+            boundaries: crate::Boundaries {
+                ground: Some(mpm_contact::Friction::Coulomb { mu: 0.3 }),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
+        let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
+        for _ in 0..n {
+            s.step().unwrap();
+        }
+        s
+    }
+
+    /// Velocities set between steps change the kinetic energy by what the ledger books as
+    /// external work: the residual stays where it was (to the rounding of the energies, 1e-12
+    /// of the kinetic energy set); the next step runs from them (a block thrown up at 1 m/s
+    /// rises); a wrong count or a NaN is refused and nothing changes.
+    #[test]
+    fn velocities_set_between_steps_are_booked_as_external_work() {
+        let mut s = settling_block(50);
+        let (before, y0) = (s.energy(), s.particles().position[0].y);
+        let up = vec![Vector::new(0.0, 1.0); 16];
+        s.set_velocities(&up).unwrap();
+        let after = s.energy();
+        assert!((after.kinetic - 0.5 * 16.0 * 0.015625 * 1000.0).abs() < 1e-12, "{after:?}");
+        assert!((after.residual - before.residual).abs() < 1e-12 * after.kinetic, "{after:?}");
+        s.step().unwrap();
+        assert!(s.particles().position[0].y > y0, "the block moves up");
+        let kept = s.particles().velocity.clone();
+        for bad in [vec![Vector::ZERO; 15], {
+            let mut v = up.clone();
+            v[3].x = f64::NAN;
+            v
+        }] {
+            assert!(matches!(
+                s.set_velocities(&bad),
+                Err(SolverError::InvalidSetting { name: "velocities", .. })
+            ));
+            assert_eq!(s.particles().velocity, kept);
+        }
+    }
+
+    /// A stiffness changed between steps changes the stored elastic energy at the present
+    /// stresses by what the ledger books as external work (halving E doubles σ : C⁻¹ : σ): the
+    /// residual stays where it was; the next steps take the stable Δt of the softer material
+    /// (its wave speed, ∝ √E, is 1/√2 of the stiffer one's: the first Δt after the change within
+    /// 1 % of √2 times the one before, the velocities being small against the wave speed).
+    #[test]
+    fn a_material_changed_between_steps_keeps_the_ledger_and_the_stability_limit() {
+        let mut s = settling_block(50);
+        let before = s.energy();
+        let dt_stiff = s.last_report().dt;
+        let soft = LinearElastic::from_young_poisson(0.5e6, 0.3).unwrap();
+        assert!(s.set_materials(vec![soft, soft]).is_err(), "two for one");
+        s.set_materials(vec![soft]).unwrap();
+        let after = s.energy();
+        assert!((after.strain - 2.0 * before.strain).abs() < 1e-12 * before.strain, "{after:?}");
+        assert!((after.residual - before.residual).abs() < 1e-9 * before.strain, "{after:?}");
+        let report = s.step().unwrap();
+        let ratio = report.dt / dt_stiff;
+        assert!((ratio / 2f64.sqrt() - 1.0).abs() < 0.01, "Δt {dt_stiff} → {}", report.dt);
     }
 }
