@@ -365,3 +365,22 @@ def test_a_sweep_takes_an_array_and_checks_its_arguments_first():
     assert list(rows["value"]) == [0.01, 0.02] and list(rows["status"]) == ["completed"] * 2
     with pytest.raises(gm.SceneError, match="did you mean `flume`"):
         gm.run("flum")
+
+
+@pytest.mark.parametrize("pandas", [False, True])
+def test_the_docstring_examples_run_as_doctests_with_and_without_pandas(pandas, monkeypatch):
+    # The examples a reader copies must give what they show, whether pandas is installed or not
+    # (with pandas the series are DataFrames). CI installs pandas and sets MPM_REQUIRE_PANDAS,
+    # so that the pandas half runs there rather than being skipped.
+    import doctest
+
+    if pandas:
+        if os.environ.get("MPM_REQUIRE_PANDAS"):
+            import pandas  # noqa: F401  (an ImportError fails the test)
+        else:
+            pytest.importorskip("pandas")
+    else:
+        monkeypatch.setitem(sys.modules, "pandas", None)  # `import pandas` raises ImportError
+    result = doctest.testmod(gm, optionflags=doctest.ELLIPSIS, report=False)
+    assert result.attempted >= 10
+    assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed"

@@ -7,11 +7,14 @@ Python. Scenes are the TOML files of ``docs/scene-format.md``; a scene is valida
 located message (file, line, field, value, admissible range, fix).
 
 >>> import granular_mpm as gm
->>> scene = gm.Scene.embedded("sliding_inclined")
+>>> scene = gm.Scene.embedded("sliding_inclined").set("solver.end_time", 0.5)
 >>> result = gm.run(scene)
 >>> result.summary["status"]
 'completed'
->>> result.runout["front_x"][-1]    # a NumPy array (a pandas Series with pandas installed)
+>>> front = result.series("runout")["front_x"]   # NumPy arrays (result.runout: a DataFrame
+...                                              # with pandas installed, else the same dict)
+>>> round(float(front[-1] - front[0]), 2)        # how far the block's front slid (m)
+0.26
 
 Runs release the GIL while they step; Ctrl-C stops a run after its current step and raises
 ``KeyboardInterrupt`` (a run with an output folder leaves a checkpoint that :func:`resume`
@@ -356,9 +359,10 @@ class Result:
 
     def series_at(self, name: str, times: Sequence[float]) -> Dict[str, np.ndarray]:
         """Series ``name`` on the given ``times`` (s), each column interpolated linearly between
-        the two rows around each time: the rows fall on step times (within a step of the
-        ``series_interval`` marks), so runs of a sweep line up on common times this way. A time
-        outside the series' span is refused."""
+        the two rows around each time: by default the rows fall on step times (within a step of
+        the ``series_interval`` marks), so runs of a sweep line up on common times this way.
+        (A scene with ``output.exact_times = true`` puts every row on its mark: its runs stack
+        row by row as they are.) A time outside the series' span is refused."""
         s = self._series.get(name)
         if s is None:
             raise ValueError(f"the run has no {name!r} series (`{name}.csv`)")
@@ -596,7 +600,12 @@ def sweep(
     Python starts them afresh (macOS, Windows), call ``sweep`` under
     ``if __name__ == "__main__":``.
 
-    >>> table = sweep("sliding_inclined", "boundaries.ground.friction", [0.2, 0.3])
+    >>> table = sweep("sliding_inclined", "boundaries.ground.friction", [0.3, 0.4],
+    ...               processes=1)
+    >>> [round(v, 2) for v in table["value"]]
+    [0.3, 0.4]
+    >>> list(table["status"])
+    ['completed', 'completed']
     """
     threads = _threads(threads) or 1
     base = _as_scene(scene)
@@ -649,7 +658,10 @@ class Simulation:
     >>> sim = Simulation(Scene.embedded("free_fall"))
     >>> sim.step(10)             # ten steps; None, or why the run stopped early
     >>> sim.advance_to(0.05)     # to t = 0.05 s
-    >>> sim.positions.shape      # (N, 2)
+    >>> sim.time
+    0.05
+    >>> sim.positions.shape == (sim.particle_count, 2)
+    True
 
     The fields are copies, taken when read. Advanced by :meth:`step`, the run takes the steps of
     :func:`run`, to the same bits. One call at a time: a call from another thread while one
