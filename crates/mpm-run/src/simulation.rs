@@ -23,8 +23,9 @@ use mpm_grid::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History};
 use mpm_output::{OutputError, atomic};
 use mpm_scene::dispatch::{self, Job, SceneModel};
+use mpm_scene::materials::ModelJob;
 use mpm_scene::{RunStatus, RunSummary, Scene};
-use mpm_solver::{EnergyLedger, Observer, RunEnd, Solver, SolverError};
+use mpm_solver::{EnergyLedger, Observer, RunEnd, Solver, SolverError, Vector};
 
 use crate::driver::{Driver, initial_state};
 use crate::error::RunError;
@@ -79,6 +80,8 @@ pub struct ParticleFields {
     pub body: Vec<u16>,
     /// each particle's material, in the scene's order of `[materials.*]`.
     pub material: Vec<u16>,
+    /// equivalent plastic strain ε̄ᵖ (its model's measure; 0 for an elastic material).
+    pub plastic_strain: Vec<f64>,
 }
 
 enum Command {
@@ -87,6 +90,9 @@ enum Command {
     Energy,
     Summary,
     Checkpoint(PathBuf),
+    SetVelocities(Vec<[f64; 2]>),
+    SetBodyForce(Option<Vec<[f64; 2]>>),
+    SetMaterial { path: String, value: String },
 }
 
 enum Reply {
@@ -96,6 +102,7 @@ enum Reply {
     Energy(EnergyLedger),
     Summary(Box<RunSummary>),
     Written(Result<(), RunError>),
+    Set(Result<(), RunError>),
     Failed(RunError),
 }
 
@@ -268,6 +275,59 @@ impl Simulation {
         }
     }
 
+    /// sets every particle's velocity (m/s, one per particle, in the order of
+    /// [`ParticleFields`]) before the next step; the kinetic energy it changes is booked as
+    /// external work in the ledger. A wrong count or a non-finite velocity is refused
+    /// ([`RunError::Arguments`]) and nothing changes.
+    pub fn set_velocities(&mut self, velocities: Vec<[f64; 2]>) -> Result<(), RunError> {
+        self.set(Command::SetVelocities(velocities))
+    }
+
+    /// prescribes a body force per unit mass on each particle (m/s², one per particle), added
+    /// to gravity from the next step until set again (`None` removes it); its work is booked
+    /// as external work. It is not part of a checkpoint: a resumed run has gravity alone. A
+    /// wrong count or a non-finite force is refused and the force set before stays.
+    pub fn set_body_force(&mut self, force: Option<Vec<[f64; 2]>>) -> Result<(), RunError> {
+        self.set(Command::SetBodyForce(force))
+    }
+
+    /// changes a material's parameter between steps: `path` is `materials.<name>.<field>` and
+    /// `value` a TOML value, the scene with it validated as a scene file is (a refused value is
+    /// the scene's located [`RunError::Scene`]). The model (`kind`) and the `density` (the
+    /// particles' masses) cannot change. The particles keep their stresses; the stored elastic
+    /// energy the new stiffness gives them is booked as external work. A checkpoint written
+    /// after it holds the changed scene.
+    pub fn set_material(&mut self, path: &str, value: &str) -> Result<(), RunError> {
+        let parts: Vec<&str> = path.split('.').collect();
+        match parts.as_slice() {
+            ["materials", name, field] if !name.is_empty() && !field.is_empty() => {
+                if matches!(*field, "kind" | "density") {
+                    return Err(RunError::Arguments(format!(
+                        "{path}: a material's {field} cannot change during a run (the \
+                         particles' {} were set at the start); run the scene again with it",
+                        if *field == "kind" { "model and state" } else { "masses" }
+                    )));
+                }
+            }
+            _ => {
+                return Err(RunError::Arguments(format!(
+                    "{path}: give a material's parameter as materials.<name>.<field> (e.g. \
+                     materials.sand.friction_angle_deg); other fields cannot change during a \
+                     run"
+                )));
+            }
+        }
+        self.set(Command::SetMaterial { path: path.to_string(), value: value.to_string() })
+    }
+
+    fn set(&mut self, c: Command) -> Result<(), RunError> {
+        self.send(c)?;
+        match self.wait(&mut || false)? {
+            Reply::Set(r) => r,
+            other => Err(unexpected(other)),
+        }
+    }
+
     fn send(&self, c: Command) -> Result<(), RunError> {
         // cleared before the command goes: a stop asked during the previous command must not
         // stop this one
@@ -364,6 +424,8 @@ impl Job for Worker {
             }
         };
         let history = History { dt_min: f64::INFINITY, ..History::default() };
+        // the scene as changed by `set_material` (its text goes into checkpoints)
+        let mut current = scene.clone();
         let mut driver = Driver::begin(scene, None, history, initial.clone(), &opts);
         if let Err(e) = driver.record_start(&solver) {
             let _ = self.outbox.send(Reply::Failed(e));
@@ -387,7 +449,7 @@ impl Job for Worker {
                         Reply::Failed(RunError::Setup("the simulation failed earlier".into()))
                     } else {
                         let mut driver = Driver::begin(
-                            scene,
+                            &current,
                             None,
                             std::mem::take(&mut history),
                             initial.clone(),
@@ -400,10 +462,12 @@ impl Job for Worker {
                         Reply::Advanced(Box::new(reply))
                     }
                 }
-                Command::Fields => Reply::Fields(Box::new(fields(solver.particles()))),
+                Command::Fields => {
+                    Reply::Fields(Box::new(fields(solver.particles(), solver.materials())))
+                }
                 Command::Energy => Reply::Energy(solver.energy()),
                 Command::Summary => {
-                    let mut driver = Driver::begin(scene, None, history, initial.clone(), &opts);
+                    let mut driver = Driver::begin(&current, None, history, initial.clone(), &opts);
                     let status = if mpm_solver::reached(solver.time(), r.end_time) {
                         RunStatus::Completed
                     } else {
@@ -415,18 +479,44 @@ impl Job for Worker {
                 }
                 Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
                     &dir,
-                    scene,
+                    &current,
                     CheckpointFile {
                         format: checkpoint::FORMAT,
                         code_version: env!("CARGO_PKG_VERSION").to_string(),
-                        origin: scene.origin().to_string(),
-                        scene_text: scene.text().to_string(),
+                        origin: current.origin().to_string(),
+                        scene_text: current.text().to_string(),
                         state: M::wrap(solver.checkpoint()),
                         history: history.clone(),
-                        scene_dir: scene.files_dir().map(str::to_string),
-                        inputs: scene.inputs().to_vec(),
+                        scene_dir: current.files_dir().map(str::to_string),
+                        inputs: current.inputs().to_vec(),
                     },
                 )),
+                _ if failed => {
+                    Reply::Set(Err(RunError::Setup("the simulation failed earlier".into())))
+                }
+                Command::SetVelocities(v) => {
+                    let v: Vec<Vector> = v.iter().map(|&[x, y]| Vector::new(x, y)).collect();
+                    Reply::Set(solver.set_velocities(&v).map_err(|e| argument("velocities", e)))
+                }
+                Command::SetBodyForce(None) => {
+                    solver.clear_body_force();
+                    Reply::Set(Ok(()))
+                }
+                Command::SetBodyForce(Some(b)) => {
+                    Reply::Set(if b.len() == solver.particles().len() {
+                        (solver.set_body_force(|p, _| Vector::new(b[p][0], b[p][1])))
+                            .map_err(|e| argument("body_force", e))
+                    } else {
+                        Err(RunError::Arguments(format!(
+                            "body_force: {} forces for {} particles; give one per particle",
+                            b.len(),
+                            solver.particles().len()
+                        )))
+                    })
+                }
+                Command::SetMaterial { path, value } => {
+                    Reply::Set(set_material(&mut solver, &mut current, &path, &value))
+                }
             };
             if self.outbox.send(reply).is_err() {
                 return;
@@ -486,7 +576,40 @@ fn outcome<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     }
 }
 
-fn fields<S>(p: &mpm_solver::Particles<S>) -> ParticleFields {
+/// a solver error of a setter as the argument's error.
+fn argument(name: &str, e: SolverError) -> RunError {
+    RunError::Arguments(format!("{name}: {e}"))
+}
+
+/// the scene with `path` = `value`, validated, and its materials given to the solver (the same
+/// model: a changed `kind` is refused).
+fn set_material<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    solver: &mut Solver<M, S, N>,
+    current: &mut Scene,
+    path: &str,
+    value: &str,
+) -> Result<(), RunError> {
+    /// the scene's materials, of whatever model they are.
+    struct Take;
+    impl ModelJob for Take {
+        type Output = Box<dyn std::any::Any>;
+        fn run<M2: SceneModel>(self, materials: Vec<M2>) -> Self::Output {
+            Box::new(materials)
+        }
+    }
+    let next = current.with_value(path, value)?;
+    let materials = next.resolved().materials.run(Take).downcast::<Vec<M>>().map_err(|_| {
+        RunError::Arguments(format!(
+            "{path} = {value}: the materials would need another model than the run's; run the \
+             scene again with it"
+        ))
+    })?;
+    solver.set_materials(*materials).map_err(|e| argument(path, e))?;
+    *current = next;
+    Ok(())
+}
+
+fn fields<M: SceneModel>(p: &mpm_solver::Particles<M::State>, materials: &[M]) -> ParticleFields {
     ParticleFields {
         position: p.position.iter().map(|v| [v.x, v.y]).collect(),
         velocity: p.velocity.iter().map(|v| [v.x, v.y]).collect(),
@@ -496,6 +619,12 @@ fn fields<S>(p: &mpm_solver::Particles<S>) -> ParticleFields {
         initial_position: p.initial_position.iter().map(|v| [v.x, v.y]).collect(),
         body: p.body.clone(),
         material: p.material.clone(),
+        plastic_strain: (0..p.len())
+            .map(|i| {
+                let m = &materials[usize::from(p.material[i])];
+                m.equivalent_plastic_strain(&p.state[i])
+            })
+            .collect(),
     }
 }
 

@@ -146,6 +146,67 @@ fn exact_times_put_every_record_on_its_mark_and_resume_to_the_same_bytes() {
     std::fs::remove_dir_all(&base).unwrap();
 }
 
+/// A run steered between steps (a coupled code's, a script's): the free-falling elastic block
+/// (no stress, no boundary reached: every node's velocity changes by (g + b)Δt, so momentum is
+/// exact to round-off, 1e-12) thrown sideways at 1 m/s keeps that velocity and falls from rest
+/// again, the kinetic energy set booked as external work (the residual moves by less than 1e-9
+/// of the kinetic energy); a body force of 2 m/s² along x adds 2 m/s per second (its work's
+/// booking is the solver's test); a material's stiffness changed
+/// goes into the checkpoint's scene, from which `resume` continues to the bits of the steered
+/// run; a change of model, of density or of a field that is not a material's is refused, and so
+/// is a value the scene refuses, naming it.
+#[test]
+fn a_simulation_takes_velocities_body_forces_and_material_changes_between_steps() {
+    let text =
+        mpm_run::embedded_scene("free_fall").unwrap().replace("end_time = 1.0", "end_time = 0.2");
+    let scene = load_scene_str(&text, "free_fall").unwrap();
+    let mut sim = Simulation::new(&scene, None, &mut || false).unwrap();
+    let mean = |sim: &mut Simulation| {
+        let f = sim.fields().unwrap();
+        let m: f64 = f.mass.iter().sum();
+        let vx = f.velocity.iter().zip(&f.mass).map(|(v, m)| v[0] * m).sum::<f64>() / m;
+        let vy = f.velocity.iter().zip(&f.mass).map(|(v, m)| v[1] * m).sum::<f64>() / m;
+        (vx, vy)
+    };
+    sim.advance(Limit::Time(0.05), &mut || false).unwrap();
+    let n = sim.particle_count();
+    let e0 = sim.energy().unwrap();
+    sim.set_velocities(vec![[1.0, 0.0]; n]).unwrap();
+    let e1 = sim.energy().unwrap();
+    assert!((e1.residual - e0.residual).abs() < 1e-9 * e0.kinetic, "{e0:?} {e1:?}");
+    sim.advance(Limit::Time(0.1), &mut || false).unwrap();
+    let (vx, vy) = mean(&mut sim);
+    assert!((vx - 1.0).abs() < 1e-12, "vx {vx}");
+    assert!((vy + 9.81 * 0.05).abs() < 1e-12, "vy {vy}");
+    sim.set_body_force(Some(vec![[2.0, 0.0]; n])).unwrap();
+    sim.advance(Limit::Time(0.15), &mut || false).unwrap();
+    let (vx, _) = mean(&mut sim);
+    assert!((vx - 1.1).abs() < 1e-12, "vx {vx} after 0.05 s at 2 m/s²");
+    let refused = sim.set_body_force(Some(vec![[2.0, 0.0]; n - 1])).unwrap_err();
+    assert!(refused.to_string().contains("body_force"), "{refused}");
+    sim.set_body_force(None).unwrap();
+    for (path, value, names) in [
+        ("materials.block.kind", "\"drucker_prager\"", "kind"),
+        ("materials.block.density", "2000.0", "density"),
+        ("solver.courant", "0.2", "materials.<name>.<field>"),
+    ] {
+        let e = sim.set_material(path, value).unwrap_err();
+        assert!(matches!(e, RunError::Arguments(_)) && e.to_string().contains(names), "{e}");
+    }
+    let e = sim.set_material("materials.block.young", "-1.0").unwrap_err();
+    assert!(matches!(&e, RunError::Scene(s) if s.path == "materials.block.young"), "{e}");
+    sim.set_material("materials.block.young", "2.0e6").unwrap();
+    let dir = std::env::temp_dir().join(format!("mpm-steered-{}", std::process::id()));
+    sim.checkpoint(&dir).unwrap();
+    let saved = std::fs::read_to_string(dir.join("scene.toml")).unwrap();
+    assert!(saved.contains("young = 2.0e6"), "{saved}");
+    sim.advance(Limit::Time(0.2), &mut || false).unwrap();
+    let steered = sim.summary().unwrap();
+    let resumed = resume(&dir, &RunOptions::default()).unwrap();
+    assert_eq!(resumed.state_hash, steered.state_hash);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A poll that asks to stop ends an advance after its current step, as Ctrl-C ends a run.
 #[test]
 fn a_poll_that_asks_to_stop_interrupts_after_a_step() {
