@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use mpm_run::{
     Limit, Progress, ProgressSink, RunError, RunOptions, RunStatus, SceneError as NativeSceneError,
 };
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -447,6 +447,11 @@ impl Simulation {
     }
 }
 
+/// a flat array's values in pairs (an odd last value is dropped: the wrapper checks the shape).
+fn pairs(flat: &[f64]) -> Vec<[f64; 2]> {
+    flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+}
+
 fn status_name(s: RunStatus) -> String {
     serde_json::to_value(s)
         .ok()
@@ -523,7 +528,28 @@ impl Simulation {
         d.set_item("volume", PyArray1::from_vec(py, f.volume))?;
         d.set_item("body", PyArray1::from_vec(py, f.body))?;
         d.set_item("material", PyArray1::from_vec(py, f.material))?;
+        d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
         Ok(d)
+    }
+
+    /// sets every particle's velocity before the next step: `v` holds the N × 2 values in a
+    /// row (x0, y0, x1, y1, ...), checked by the Python wrapper.
+    fn set_velocities(&self, py: Python<'_>, v: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+        let v = pairs(v.as_slice()?);
+        self.with(py, |s| s.set_velocities(v))
+    }
+
+    /// prescribes a body force per unit mass on each particle from the next step (`None`
+    /// removes it): `b` as `set_velocities`'s values.
+    #[pyo3(signature = (b = None))]
+    fn set_body_force(&self, py: Python<'_>, b: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
+        let b = b.map(|b| b.as_slice().map(pairs)).transpose()?;
+        self.with(py, |s| s.set_body_force(b))
+    }
+
+    /// changes a material's parameter (`materials.<name>.<field>`, a TOML value as text).
+    fn set_material(&self, py: Python<'_>, path: &str, value: &str) -> PyResult<()> {
+        self.with(py, |s| s.set_material(path, value))
     }
 
     /// the energy ledger now, as JSON text.

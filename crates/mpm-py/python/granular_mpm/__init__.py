@@ -664,8 +664,10 @@ class Simulation:
     True
 
     The fields are copies, taken when read. Advanced by :meth:`step`, the run takes the steps of
-    :func:`run`, to the same bits. One call at a time: a call from another thread while one
-    runs raises ``RuntimeError``.
+    :func:`run`, to the same bits. Between steps a caller may set the velocities, a body force
+    and a material's parameters (:meth:`set_velocities`, :meth:`set_body_force`, :meth:`set`),
+    each booked in the energy ledger. One call at a time: a call from another thread while one
+    runs raises ``RuntimeError``. 3D scenes run with :func:`run`; ``Simulation`` is 2D.
     """
 
     def __init__(self, scene: Union[Scene, str, PathLike], threads: Optional[int] = None):
@@ -700,9 +702,63 @@ class Simulation:
 
     def fields(self) -> Dict[str, np.ndarray]:
         """All particle fields at once: ``position``, ``velocity``, ``initial_position`` (N × 2,
-        m and m/s), ``stress`` (N × 4: xx, yy, zz, xy in Pa, tension positive), ``mass``,
-        ``volume`` (per m of thickness), ``body`` and ``material`` (indices)."""
-        return dict(self._native.fields())
+        m and m/s), ``stress`` (N × 4: xx, yy, zz, xy in Pa, tension positive), ``pressure``
+        (−tr σ / 3, Pa, compression positive), ``plastic_strain`` (the model's equivalent plastic
+        strain; 0 for an elastic material), ``mass``, ``volume`` (per m of thickness),
+        ``density`` (mass / volume, kg/m³), ``body`` and ``material`` (indices)."""
+        f = dict(self._native.fields())
+        f["pressure"] = -f["stress"][:, :3].sum(axis=1) / 3.0
+        f["density"] = f["mass"] / f["volume"]
+        return f
+
+    def _pairs(self, values: Any, name: str, one_for_all: bool) -> np.ndarray:
+        """``values`` as N × 2 finite floats in a row (a single pair for every particle when
+        ``one_for_all``), or a ``ValueError`` naming ``name``."""
+        n = self.particle_count
+        try:
+            a = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}: give an N × 2 array of numbers (N = {n} particles)")
+        if one_for_all and a.shape == (2,):
+            a = np.tile(a, (n, 1))
+        if a.shape != (n, 2):
+            what = "an N × 2 array or one [x, y] pair for all" if one_for_all else "an N × 2 array"
+            raise ValueError(f"{name}: give {what} (N = {n} particles); got shape {a.shape}")
+        bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
+        if bad.size:
+            raise ValueError(f"{name}: particle {bad[0]}'s value {a[bad[0]].tolist()} is not finite")
+        return np.ascontiguousarray(a).reshape(-1)
+
+    def set_velocities(self, velocities: Any) -> None:
+        """Sets every particle's velocity before the next step: an N × 2 array (m/s) in the
+        order of :meth:`fields`. The kinetic energy it changes is booked as external work in the
+        ledger (its residual does not move); the next Δt follows the new velocities."""
+        self._native.set_velocities(self._pairs(velocities, "velocities", False))
+
+    def set_body_force(self, force: Any) -> None:
+        """Adds a body force per unit mass (m/s²) to gravity on every particle from the next
+        step until set again: an N × 2 array, or one ``[bx, by]`` for all; ``None`` removes
+        it. Its work is booked as external work. It is not part of a :meth:`checkpoint` (a
+        resumed run has gravity alone)."""
+        if force is None:
+            self._native.set_body_force(None)
+        else:
+            self._native.set_body_force(self._pairs(force, "force", True))
+
+    def set(self, path: str, value: Any) -> "Simulation":
+        """Changes a material's parameter between steps, ``path`` as
+        ``"materials.<name>.<field>"`` (e.g. a strength reduction:
+        ``sim.set("materials.sand.friction_angle_deg", 25.0)``), the scene with it checked as
+        :meth:`Scene.set` checks it (a refused value raises :class:`SceneError`). The model
+        (``kind``), the ``density`` and every other field stay as the run started (a
+        ``ValueError``). The particles keep their stresses (a stress outside a new yield
+        surface returns to it in the next step); the elastic energy a new stiffness gives them
+        is booked as external work. A :meth:`checkpoint` after it holds the changed scene.
+        Returns the simulation."""
+        if not isinstance(path, str):
+            raise ValueError(f"path = {path!r}: give the field as text, e.g. 'materials.sand.young'")
+        self._native.set_material(path, _toml_value(value))
+        return self
 
     @property
     def positions(self) -> np.ndarray:
