@@ -447,9 +447,28 @@ impl Simulation {
     }
 }
 
-/// a flat array's values in pairs (an odd last value is dropped: the wrapper checks the shape).
-fn pairs(flat: &[f64]) -> Vec<[f64; 2]> {
-    flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+/// a run's particle fields as a dict of NumPy arrays.
+fn field_dict<'py, const D: usize, const C: usize>(
+    py: Python<'py>,
+    f: mpm_run::ParticleFields<D, C>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let n = f.mass.len();
+    let flat = |v: &[[f64; D]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    d.set_item("position", PyArray1::from_vec(py, flat(&f.position)).reshape([n, D])?)?;
+    d.set_item("velocity", PyArray1::from_vec(py, flat(&f.velocity)).reshape([n, D])?)?;
+    d.set_item(
+        "initial_position",
+        PyArray1::from_vec(py, flat(&f.initial_position)).reshape([n, D])?,
+    )?;
+    let stress: Vec<f64> = f.stress.iter().flatten().copied().collect();
+    d.set_item("stress", PyArray1::from_vec(py, stress).reshape([n, C])?)?;
+    d.set_item("mass", PyArray1::from_vec(py, f.mass))?;
+    d.set_item("volume", PyArray1::from_vec(py, f.volume))?;
+    d.set_item("body", PyArray1::from_vec(py, f.body))?;
+    d.set_item("material", PyArray1::from_vec(py, f.material))?;
+    d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
+    Ok(d)
 }
 
 fn status_name(s: RunStatus) -> String {
@@ -466,13 +485,14 @@ impl Simulation {
     #[pyo3(signature = (scene, threads = None))]
     fn new(py: Python<'_>, scene: &Scene, threads: Option<usize>) -> PyResult<Simulation> {
         let mut waiter = Waiter::new(None);
-        let mpm_run::AnyScene::Plane(scene) = &scene.inner else {
-            return Err(PyValueError::new_err(
-                "a 3D scene: step-by-step runs (Simulation) are 2D only for now; run it with \
-                 granular_mpm.run (which writes its frames, series and checkpoints)",
-            ));
-        };
-        let result = py.detach(|| mpm_run::Simulation::new(scene, threads, &mut || waiter.poll()));
+        let result = py.detach(|| match &scene.inner {
+            mpm_run::AnyScene::Plane(s) => {
+                mpm_run::Simulation::new(s, threads, &mut || waiter.poll())
+            }
+            mpm_run::AnyScene::Space(s) => {
+                mpm_run::Simulation::new_space(s, threads, &mut || waiter.poll())
+            }
+        });
         if let Some(e) = waiter.pending.take() {
             return Err(e);
         }
@@ -510,32 +530,27 @@ impl Simulation {
         self.with(py, |s| Ok(s.particle_count()))
     }
 
-    /// the particles' fields as NumPy arrays (copies).
+    /// 2 or 3.
+    #[getter]
+    fn dimension(&self, py: Python<'_>) -> PyResult<u8> {
+        self.with(py, |s| Ok(s.dimension()))
+    }
+
+    /// the particles' fields as NumPy arrays (copies): vectors N × 2 or N × 3, stresses N × 4
+    /// (xx, yy, zz, xy) or N × 6 (xx, yy, zz, xy, yz, zx).
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        if self.with(py, |s| Ok(s.dimension()))? == 3 {
+            let f = self.with(py, |s| s.space_fields())?;
+            return field_dict(py, f);
+        }
         let f = self.with(py, |s| s.fields())?;
-        let d = PyDict::new(py);
-        let n = f.mass.len();
-        let flat2 = |v: &[[f64; 2]]| v.iter().flatten().copied().collect::<Vec<f64>>();
-        d.set_item("position", PyArray1::from_vec(py, flat2(&f.position)).reshape([n, 2])?)?;
-        d.set_item("velocity", PyArray1::from_vec(py, flat2(&f.velocity)).reshape([n, 2])?)?;
-        d.set_item(
-            "initial_position",
-            PyArray1::from_vec(py, flat2(&f.initial_position)).reshape([n, 2])?,
-        )?;
-        let stress: Vec<f64> = f.stress.iter().flatten().copied().collect();
-        d.set_item("stress", PyArray1::from_vec(py, stress).reshape([n, 4])?)?;
-        d.set_item("mass", PyArray1::from_vec(py, f.mass))?;
-        d.set_item("volume", PyArray1::from_vec(py, f.volume))?;
-        d.set_item("body", PyArray1::from_vec(py, f.body))?;
-        d.set_item("material", PyArray1::from_vec(py, f.material))?;
-        d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
-        Ok(d)
+        field_dict(py, f)
     }
 
     /// sets every particle's velocity before the next step: `v` holds the N × 2 values in a
     /// row (x0, y0, x1, y1, ...), checked by the Python wrapper.
     fn set_velocities(&self, py: Python<'_>, v: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
-        let v = pairs(v.as_slice()?);
+        let v = v.as_slice()?.to_vec();
         self.with(py, |s| s.set_velocities(v))
     }
 
@@ -543,7 +558,7 @@ impl Simulation {
     /// removes it): `b` as `set_velocities`'s values.
     #[pyo3(signature = (b = None))]
     fn set_body_force(&self, py: Python<'_>, b: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
-        let b = b.map(|b| b.as_slice().map(pairs)).transpose()?;
+        let b = b.map(|b| b.as_slice().map(<[f64]>::to_vec)).transpose()?;
         self.with(py, |s| s.set_body_force(b))
     }
 

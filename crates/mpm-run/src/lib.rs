@@ -73,7 +73,7 @@ pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use options::{MAX_THREADS, available_threads};
 pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
-pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation};
+pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation, SpaceFields};
 pub use space::{check_space_scene, run_space_scene};
 // The scene library, re-exported so that a front end needs one import path.
 pub use mpm_scene::limits::{MAX_PARTICLES, MAX_PARTICLES_PER_CELL};

@@ -60,22 +60,23 @@ pub struct Advance {
     pub particles: usize,
 }
 
-/// The particles' fields, copied (plane strain: 2 components a vector, stresses as xx, yy, zz,
-/// xy in Pa, tension positive).
+/// The particles' fields, copied: in plane strain (the defaults `D` = 2, `C` = 4) 2 components a
+/// vector and stresses as xx, yy, zz, xy; in 3D ([`SpaceFields`]) 3 components and xx, yy, zz,
+/// xy, yz, zx (Pa, tension positive).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ParticleFields {
+pub struct ParticleFields<const D: usize = 2, const C: usize = 4> {
     /// positions (m).
-    pub position: Vec<[f64; 2]>,
+    pub position: Vec<[f64; D]>,
     /// velocities (m/s).
-    pub velocity: Vec<[f64; 2]>,
-    /// Cauchy stresses: xx, yy, zz (out of plane), xy (Pa).
-    pub stress: Vec<[f64; 4]>,
-    /// masses (kg per m of thickness).
+    pub velocity: Vec<[f64; D]>,
+    /// Cauchy stresses: xx, yy, zz (out of plane in 2D), xy[, yz, zx] (Pa).
+    pub stress: Vec<[f64; C]>,
+    /// masses (kg; per m of thickness in 2D).
     pub mass: Vec<f64>,
-    /// volumes (m² per m of thickness).
+    /// volumes (m³; m² per m of thickness in 2D).
     pub volume: Vec<f64>,
     /// positions at the start (m).
-    pub initial_position: Vec<[f64; 2]>,
+    pub initial_position: Vec<[f64; D]>,
     /// each particle's body, as numbered in the scene's `[[bodies]]`.
     pub body: Vec<u16>,
     /// each particle's material, in the scene's order of `[materials.*]`.
@@ -84,21 +85,25 @@ pub struct ParticleFields {
     pub plastic_strain: Vec<f64>,
 }
 
-enum Command {
+/// A 3D run's particle fields.
+pub type SpaceFields = ParticleFields<3, 6>;
+
+pub(crate) enum Command {
     Advance(Limit),
     Fields,
     Energy,
     Summary,
     Checkpoint(PathBuf),
-    SetVelocities(Vec<[f64; 2]>),
-    SetBodyForce(Option<Vec<[f64; 2]>>),
+    SetVelocities(Vec<f64>),
+    SetBodyForce(Option<Vec<f64>>),
     SetMaterial { path: String, value: String },
 }
 
-enum Reply {
+pub(crate) enum Reply {
     Ready { time: f64, steps: u64, particles: usize },
     Advanced(Box<Result<Advance, RunError>>),
     Fields(Box<ParticleFields>),
+    SpaceFields(Box<SpaceFields>),
     Energy(EnergyLedger),
     Summary(Box<RunSummary>),
     Written(Result<(), RunError>),
@@ -115,6 +120,7 @@ pub struct Simulation {
     time: f64,
     steps: u64,
     particles: usize,
+    dimension: u8,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -123,6 +129,7 @@ impl std::fmt::Debug for Simulation {
             .field("time", &self.time)
             .field("steps", &self.steps)
             .field("particles", &self.particles)
+            .field("dimension", &self.dimension)
             .finish_non_exhaustive()
     }
 }
@@ -136,24 +143,51 @@ impl Simulation {
         threads: Option<usize>,
         poll: &mut dyn FnMut() -> bool,
     ) -> Result<Simulation, RunError> {
+        let scene = scene.clone();
+        Self::start(2, scene.resolved().seeds.len(), threads, poll, move |job, outbox| {
+            if let Err(e) = dispatch::dispatch(&scene, job) {
+                let _ = outbox.send(Reply::Failed(e.into()));
+            }
+        })
+    }
+
+    /// [`Simulation::new`] for a 3D scene: the same commands, with 3-component vectors
+    /// ([`Simulation::space_fields`]; `set_velocities` and `set_body_force` take x, y, z per
+    /// particle).
+    pub fn new_space(
+        scene: &mpm_scene::SpaceScene,
+        threads: Option<usize>,
+        poll: &mut dyn FnMut() -> bool,
+    ) -> Result<Simulation, RunError> {
+        let scene = scene.clone();
+        Self::start(3, scene.seeds.len(), threads, poll, move |job, outbox| {
+            if let Err(e) = mpm_scene::dispatch_space(&scene, crate::space::SpaceWorker(job)) {
+                let _ = outbox.send(Reply::Failed(e.into()));
+            }
+        })
+    }
+
+    /// starts the worker thread with a pool for `particles` particles, running `serve`.
+    fn start(
+        dimension: u8,
+        particles: usize,
+        threads: Option<usize>,
+        poll: &mut dyn FnMut() -> bool,
+        serve: impl FnOnce(Worker, Sender<Reply>) + Send + 'static,
+    ) -> Result<Simulation, RunError> {
         let (commands, inbox) = mpsc::channel();
         let (outbox, replies) = mpsc::channel();
         let interrupt = Arc::new(AtomicBool::new(false));
         let available = crate::options::available_threads(threads)?;
-        let count = mpm_solver::useful_threads(scene.resolved().seeds.len(), available);
+        let count = mpm_solver::useful_threads(particles, available);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(count)
             .build()
             .map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
         let job = Worker { inbox, outbox: outbox.clone(), interrupt: interrupt.clone() };
-        let scene = scene.clone();
         let worker = std::thread::Builder::new()
             .name("mpm-simulation".into())
-            .spawn(move || {
-                if let Err(e) = pool.install(|| dispatch::dispatch(&scene, job)) {
-                    let _ = outbox.send(Reply::Failed(e.into()));
-                }
-            })
+            .spawn(move || pool.install(|| serve(job, outbox)))
             .map_err(|e| RunError::Setup(format!("cannot start the simulation's thread: {e}")))?;
         let mut sim = Simulation {
             commands: Some(commands),
@@ -163,6 +197,7 @@ impl Simulation {
             time: 0.0,
             steps: 0,
             particles: 0,
+            dimension,
         };
         match sim.wait(poll)? {
             Reply::Ready { time, steps, particles } => {
@@ -187,6 +222,11 @@ impl Simulation {
     /// number of particles.
     pub fn particle_count(&self) -> usize {
         self.particles
+    }
+
+    /// 2 (plane strain) or 3.
+    pub fn dimension(&self) -> u8 {
+        self.dimension
     }
 
     /// advances by `limit`, calling `poll` every [`POLL`] while the steps run; when `poll`
@@ -234,11 +274,26 @@ impl Simulation {
         }
     }
 
-    /// a copy of the particles' fields.
+    /// a copy of the particles' fields (a 2D run's; a 3D run's are [`Self::space_fields`]).
     pub fn fields(&mut self) -> Result<ParticleFields, RunError> {
+        if self.dimension != 2 {
+            return Err(RunError::Arguments("a 3D run: its fields are space_fields()".into()));
+        }
         self.send(Command::Fields)?;
         match self.wait(&mut || false)? {
             Reply::Fields(f) => Ok(*f),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// a copy of a 3D run's particle fields.
+    pub fn space_fields(&mut self) -> Result<SpaceFields, RunError> {
+        if self.dimension != 3 {
+            return Err(RunError::Arguments("a 2D run: its fields are fields()".into()));
+        }
+        self.send(Command::Fields)?;
+        match self.wait(&mut || false)? {
+            Reply::SpaceFields(f) => Ok(*f),
             other => Err(unexpected(other)),
         }
     }
@@ -275,20 +330,38 @@ impl Simulation {
         }
     }
 
-    /// sets every particle's velocity (m/s, one per particle, in the order of
-    /// [`ParticleFields`]) before the next step; the kinetic energy it changes is booked as
-    /// external work in the ledger. A wrong count or a non-finite velocity is refused
-    /// ([`RunError::Arguments`]) and nothing changes.
-    pub fn set_velocities(&mut self, velocities: Vec<[f64; 2]>) -> Result<(), RunError> {
+    /// sets every particle's velocity (m/s) before the next step: `velocities` holds x, y (and
+    /// z in 3D) of each particle in turn, in the order of the fields; the kinetic energy it
+    /// changes is booked as external work in the ledger. A wrong count or a non-finite
+    /// velocity is refused ([`RunError::Arguments`]) and nothing changes.
+    pub fn set_velocities(&mut self, velocities: Vec<f64>) -> Result<(), RunError> {
+        self.check_count("velocities", velocities.len())?;
         self.set(Command::SetVelocities(velocities))
     }
 
-    /// prescribes a body force per unit mass on each particle (m/s², one per particle), added
-    /// to gravity from the next step until set again (`None` removes it); its work is booked
-    /// as external work. It is not part of a checkpoint: a resumed run has gravity alone. A
-    /// wrong count or a non-finite force is refused and the force set before stays.
-    pub fn set_body_force(&mut self, force: Option<Vec<[f64; 2]>>) -> Result<(), RunError> {
+    /// prescribes a body force per unit mass on each particle (m/s², its components in turn as
+    /// [`Self::set_velocities`]'s), added to gravity from the next step until set again (`None`
+    /// removes it); its work is booked as external work. It is not part of a checkpoint: a
+    /// resumed run has gravity alone. A wrong count or a non-finite force is refused and the
+    /// force set before stays.
+    pub fn set_body_force(&mut self, force: Option<Vec<f64>>) -> Result<(), RunError> {
+        if let Some(f) = &force {
+            self.check_count("body_force", f.len())?;
+        }
         self.set(Command::SetBodyForce(force))
+    }
+
+    /// one value per particle and component, or the argument's error.
+    fn check_count(&self, name: &str, len: usize) -> Result<(), RunError> {
+        let d = usize::from(self.dimension);
+        if len == d * self.particles {
+            return Ok(());
+        }
+        Err(RunError::Arguments(format!(
+            "{name}: {len} values for {} particles in {d}D; give {d} per particle ({})",
+            self.particles,
+            d * self.particles
+        )))
     }
 
     /// changes a material's parameter between steps: `path` is `materials.<name>.<field>` and
@@ -382,10 +455,10 @@ fn unexpected(r: Reply) -> RunError {
 }
 
 /// The worker's side: builds the solver with the scene's types and serves commands.
-struct Worker {
-    inbox: Receiver<Command>,
-    outbox: Sender<Reply>,
-    interrupt: Arc<AtomicBool>,
+pub(crate) struct Worker {
+    pub(crate) inbox: Receiver<Command>,
+    pub(crate) outbox: Sender<Reply>,
+    pub(crate) interrupt: Arc<AtomicBool>,
 }
 
 impl Job for Worker {
@@ -479,7 +552,6 @@ impl Job for Worker {
                 }
                 Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
                     &dir,
-                    &current,
                     CheckpointFile {
                         format: checkpoint::FORMAT,
                         code_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -495,7 +567,8 @@ impl Job for Worker {
                     Reply::Set(Err(RunError::Setup("the simulation failed earlier".into())))
                 }
                 Command::SetVelocities(v) => {
-                    let v: Vec<Vector> = v.iter().map(|&[x, y]| Vector::new(x, y)).collect();
+                    let v: Vec<Vector> =
+                        v.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
                     Reply::Set(solver.set_velocities(&v).map_err(|e| argument("velocities", e)))
                 }
                 Command::SetBodyForce(None) => {
@@ -503,16 +576,13 @@ impl Job for Worker {
                     Reply::Set(Ok(()))
                 }
                 Command::SetBodyForce(Some(b)) => {
-                    Reply::Set(if b.len() == solver.particles().len() {
-                        (solver.set_body_force(|p, _| Vector::new(b[p][0], b[p][1])))
-                            .map_err(|e| argument("body_force", e))
-                    } else {
-                        Err(RunError::Arguments(format!(
-                            "body_force: {} forces for {} particles; give one per particle",
-                            b.len(),
-                            solver.particles().len()
-                        )))
-                    })
+                    // (the count was checked against the particles on the caller's side)
+                    let b: Vec<Vector> =
+                        b.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
+                    Reply::Set(
+                        (solver.set_body_force(|p, _| b.get(p).copied().unwrap_or(Vector::NAN)))
+                            .map_err(|e| argument("body_force", e)),
+                    )
                 }
                 Command::SetMaterial { path, value } => {
                     Reply::Set(set_material(&mut solver, &mut current, &path, &value))
@@ -576,8 +646,31 @@ fn outcome<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     }
 }
 
+/// a scene's materials as the run's model `M`, or the error of a change (`path` = `value`) that
+/// would need another model.
+pub(crate) fn materials_of<M: SceneModel>(
+    built: &mpm_scene::materials::MaterialsBuilt,
+    path: &str,
+    value: &str,
+) -> Result<Vec<M>, RunError> {
+    /// the scene's materials, of whatever model they are.
+    struct Take;
+    impl ModelJob for Take {
+        type Output = Box<dyn std::any::Any>;
+        fn run<M2: SceneModel>(self, materials: Vec<M2>) -> Self::Output {
+            Box::new(materials)
+        }
+    }
+    built.run(Take).downcast::<Vec<M>>().map(|m| *m).map_err(|_| {
+        RunError::Arguments(format!(
+            "{path} = {value}: the materials would need another model than the run's; run the \
+             scene again with it"
+        ))
+    })
+}
+
 /// a solver error of a setter as the argument's error.
-fn argument(name: &str, e: SolverError) -> RunError {
+pub(crate) fn argument(name: &str, e: impl std::fmt::Display) -> RunError {
     RunError::Arguments(format!("{name}: {e}"))
 }
 
@@ -589,22 +682,9 @@ fn set_material<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     path: &str,
     value: &str,
 ) -> Result<(), RunError> {
-    /// the scene's materials, of whatever model they are.
-    struct Take;
-    impl ModelJob for Take {
-        type Output = Box<dyn std::any::Any>;
-        fn run<M2: SceneModel>(self, materials: Vec<M2>) -> Self::Output {
-            Box::new(materials)
-        }
-    }
     let next = current.with_value(path, value)?;
-    let materials = next.resolved().materials.run(Take).downcast::<Vec<M>>().map_err(|_| {
-        RunError::Arguments(format!(
-            "{path} = {value}: the materials would need another model than the run's; run the \
-             scene again with it"
-        ))
-    })?;
-    solver.set_materials(*materials).map_err(|e| argument(path, e))?;
+    let materials = materials_of::<M>(&next.resolved().materials, path, value)?;
+    solver.set_materials(materials).map_err(|e| argument(path, e))?;
     *current = next;
     Ok(())
 }
@@ -628,11 +708,11 @@ fn fields<M: SceneModel>(p: &mpm_solver::Particles<M::State>, materials: &[M]) -
     }
 }
 
-/// `dir/checkpoint.bin` and `dir/scene.toml`.
-fn write_checkpoint(dir: &Path, scene: &Scene, file: CheckpointFile) -> Result<(), RunError> {
+/// `dir/checkpoint.bin` and `dir/scene.toml` (the checkpoint's scene).
+pub(crate) fn write_checkpoint(dir: &Path, file: CheckpointFile) -> Result<(), RunError> {
     std::fs::create_dir_all(dir)
         .map_err(|source| OutputError::Io { path: dir.to_path_buf(), source })?;
-    atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
+    atomic::write(&dir.join("scene.toml"), file.scene_text.as_bytes())?;
     checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?;
     Ok(())
 }

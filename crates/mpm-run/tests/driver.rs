@@ -171,18 +171,18 @@ fn a_simulation_takes_velocities_body_forces_and_material_changes_between_steps(
     sim.advance(Limit::Time(0.05), &mut || false).unwrap();
     let n = sim.particle_count();
     let e0 = sim.energy().unwrap();
-    sim.set_velocities(vec![[1.0, 0.0]; n]).unwrap();
+    sim.set_velocities([1.0, 0.0].repeat(n)).unwrap();
     let e1 = sim.energy().unwrap();
     assert!((e1.residual - e0.residual).abs() < 1e-9 * e0.kinetic, "{e0:?} {e1:?}");
     sim.advance(Limit::Time(0.1), &mut || false).unwrap();
     let (vx, vy) = mean(&mut sim);
     assert!((vx - 1.0).abs() < 1e-12, "vx {vx}");
     assert!((vy + 9.81 * 0.05).abs() < 1e-12, "vy {vy}");
-    sim.set_body_force(Some(vec![[2.0, 0.0]; n])).unwrap();
+    sim.set_body_force(Some([2.0, 0.0].repeat(n))).unwrap();
     sim.advance(Limit::Time(0.15), &mut || false).unwrap();
     let (vx, _) = mean(&mut sim);
     assert!((vx - 1.1).abs() < 1e-12, "vx {vx} after 0.05 s at 2 m/s²");
-    let refused = sim.set_body_force(Some(vec![[2.0, 0.0]; n - 1])).unwrap_err();
+    let refused = sim.set_body_force(Some([2.0, 0.0].repeat(n - 1))).unwrap_err();
     assert!(refused.to_string().contains("body_force"), "{refused}");
     sim.set_body_force(None).unwrap();
     for (path, value, names) in [
@@ -304,6 +304,49 @@ fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
         assert_eq!(read(&part_dir), read(&whole_dir), "maps/{map}.tif as in one go");
     }
     std::fs::remove_dir_all(&base).unwrap();
+}
+
+/// A 3D run advanced from outside in pieces is the run itself (the state hash, steps and energy
+/// ledger of `run_space_scene` in one go), with 3-component fields and 6-component stresses; it
+/// takes velocities between steps (booked: the residual moves by less than 1e-9 of the kinetic
+/// energy set) and a material's change, and its checkpoint resumes to the bits of the steered
+/// run; a wrong count of components is refused.
+#[test]
+fn a_3d_simulation_is_the_run_itself_and_is_steered_between_steps() {
+    let scene = mpm_scene::load_space_str(BLOCK_3D, "block3d").unwrap();
+    let whole = mpm_run::run_space_scene(&scene, &RunOptions::default()).unwrap();
+    let mut sim = Simulation::new_space(&scene, None, &mut || false).unwrap();
+    assert_eq!(sim.dimension(), 3);
+    sim.advance(Limit::Steps(7), &mut || false).unwrap();
+    sim.advance(Limit::Steps(30), &mut || false).unwrap();
+    sim.advance(Limit::Time(scene.end_time), &mut || false).unwrap();
+    let stepped = sim.summary().unwrap();
+    assert_eq!(stepped.state_hash, whole.state_hash);
+    assert_eq!(stepped.steps, whole.steps);
+    assert_eq!(stepped.energy, whole.energy);
+    let f = sim.space_fields().unwrap();
+    assert_eq!((f.position.len(), f.stress.len()), (sim.particle_count(), sim.particle_count()));
+    assert!(f.stress.iter().all(|s| s[1] <= 0.0), "the block presses on its floor");
+    assert!(sim.fields().is_err(), "a 3D run's fields are space_fields");
+
+    let mut sim = Simulation::new_space(&scene, None, &mut || false).unwrap();
+    sim.advance(Limit::Time(0.03), &mut || false).unwrap();
+    let n = sim.particle_count();
+    assert!(sim.set_velocities([0.0, 0.0, 1.0].repeat(n - 1)).is_err(), "one short");
+    let e0 = sim.energy().unwrap();
+    sim.set_velocities([0.0, 0.0, 0.5].repeat(n)).unwrap();
+    let e1 = sim.energy().unwrap();
+    assert!((e1.residual - e0.residual).abs() < 1e-9 * e1.kinetic, "{e0:?} {e1:?}");
+    sim.advance(Limit::Steps(5), &mut || false).unwrap();
+    sim.set_material("materials.sand.friction_angle_deg", "25.0").unwrap();
+    let dir = std::env::temp_dir().join(format!("mpm-steered3d-{}", std::process::id()));
+    sim.checkpoint(&dir).unwrap();
+    sim.advance(Limit::Time(scene.end_time), &mut || false).unwrap();
+    let steered = sim.summary().unwrap();
+    assert_ne!(steered.state_hash, whole.state_hash);
+    let resumed = resume(&dir, &RunOptions::default()).unwrap();
+    assert_eq!(resumed.state_hash, steered.state_hash);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Hazard maps of a 0.4 × 0.2 × 0.4 m elastic block sliding without gravity at 2 m/s along x

@@ -667,7 +667,8 @@ class Simulation:
     :func:`run`, to the same bits. Between steps a caller may set the velocities, a body force
     and a material's parameters (:meth:`set_velocities`, :meth:`set_body_force`, :meth:`set`),
     each booked in the energy ledger. One call at a time: a call from another thread while one
-    runs raises ``RuntimeError``. 3D scenes run with :func:`run`; ``Simulation`` is 2D.
+    runs raises ``RuntimeError``. A 3D scene's ``Simulation`` is the same, with three
+    components a vector and six a stress.
     """
 
     def __init__(self, scene: Union[Scene, str, PathLike], threads: Optional[int] = None):
@@ -700,11 +701,17 @@ class Simulation:
         """Number of particles."""
         return self._native.particle_count
 
+    @property
+    def dimension(self) -> int:
+        """2 (plane strain) or 3."""
+        return self._native.dimension
+
     def fields(self) -> Dict[str, np.ndarray]:
         """All particle fields at once: ``position``, ``velocity``, ``initial_position`` (N × 2,
-        m and m/s), ``stress`` (N × 4: xx, yy, zz, xy in Pa, tension positive), ``pressure``
+        or N × 3 in 3D; m and m/s), ``stress`` (N × 4: xx, yy, zz, xy; in 3D N × 6: xx, yy,
+        zz, xy, yz, zx; Pa, tension positive), ``pressure``
         (−tr σ / 3, Pa, compression positive), ``plastic_strain`` (the model's equivalent plastic
-        strain; 0 for an elastic material), ``mass``, ``volume`` (per m of thickness),
+        strain; 0 for an elastic material), ``mass``, ``volume`` (per m of thickness in 2D),
         ``density`` (mass / volume, kg/m³), ``body`` and ``material`` (indices)."""
         f = dict(self._native.fields())
         f["pressure"] = -f["stress"][:, :3].sum(axis=1) / 3.0
@@ -712,17 +719,17 @@ class Simulation:
         return f
 
     def _pairs(self, values: Any, name: str, one_for_all: bool) -> np.ndarray:
-        """``values`` as N × 2 finite floats in a row (a single pair for every particle when
-        ``one_for_all``), or a ``ValueError`` naming ``name``."""
-        n = self.particle_count
+        """``values`` as N × d finite floats in a row (d the dimension; one vector for every
+        particle when ``one_for_all``), or a ``ValueError`` naming ``name``."""
+        n, d = self.particle_count, self.dimension
         try:
             a = np.asarray(values, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"{name}: give an N × 2 array of numbers (N = {n} particles)")
-        if one_for_all and a.shape == (2,):
+            raise ValueError(f"{name}: give an N × {d} array of numbers (N = {n} particles)")
+        if one_for_all and a.shape == (d,):
             a = np.tile(a, (n, 1))
-        if a.shape != (n, 2):
-            what = "an N × 2 array or one [x, y] pair for all" if one_for_all else "an N × 2 array"
+        if a.shape != (n, d):
+            what = f"an N × {d} array" + (" or one vector for all" if one_for_all else "")
             raise ValueError(f"{name}: give {what} (N = {n} particles); got shape {a.shape}")
         bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
         if bad.size:
@@ -730,14 +737,14 @@ class Simulation:
         return np.ascontiguousarray(a).reshape(-1)
 
     def set_velocities(self, velocities: Any) -> None:
-        """Sets every particle's velocity before the next step: an N × 2 array (m/s) in the
-        order of :meth:`fields`. The kinetic energy it changes is booked as external work in the
+        """Sets every particle's velocity before the next step: an N × 2 (3D: N × 3) array
+        (m/s) in the order of :meth:`fields`. The kinetic energy it changes is booked as external work in the
         ledger (its residual does not move); the next Δt follows the new velocities."""
         self._native.set_velocities(self._pairs(velocities, "velocities", False))
 
     def set_body_force(self, force: Any) -> None:
         """Adds a body force per unit mass (m/s²) to gravity on every particle from the next
-        step until set again: an N × 2 array, or one ``[bx, by]`` for all; ``None`` removes
+        step until set again: an N × 2 (3D: N × 3) array, or one vector for all; ``None`` removes
         it. Its work is booked as external work. It is not part of a :meth:`checkpoint` (a
         resumed run has gravity alone)."""
         if force is None:
@@ -762,17 +769,18 @@ class Simulation:
 
     @property
     def positions(self) -> np.ndarray:
-        """Particle positions, N × 2 (m)."""
+        """Particle positions, N × 2 (3D: N × 3) (m)."""
         return self._native.fields()["position"]
 
     @property
     def velocities(self) -> np.ndarray:
-        """Particle velocities, N × 2 (m/s)."""
+        """Particle velocities, N × 2 (3D: N × 3) (m/s)."""
         return self._native.fields()["velocity"]
 
     @property
     def stresses(self) -> np.ndarray:
-        """Cauchy stresses, N × 4: xx, yy, zz (out of plane), xy (Pa, tension positive)."""
+        """Cauchy stresses, N × 4: xx, yy, zz (out of plane), xy; in 3D N × 6: xx, yy, zz, xy,
+        yz, zx (Pa, tension positive)."""
         return self._native.fields()["stress"]
 
     @property
