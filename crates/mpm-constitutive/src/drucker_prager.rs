@@ -628,6 +628,13 @@ impl<V: DpVariables> ConstitutiveModel for DruckerPrager<V> {
         V::new(SymTensor::ZERO, self.k0, 0.0)
     }
 
+    /// the cone size moved by the change of `k0` (the hardening so far kept), the back stress
+    /// and `ε̄ᵖ` as they are.
+    fn carried_state(&self, previous: &Self, state: &V) -> V {
+        let k = state.k(previous.k0) + (self.k0 - previous.k0);
+        V::new(state.back_stress(), k, state.eps_p_bar())
+    }
+
     /// the elastic part's (hardening changes no stiffness).
     fn p_wave_modulus(&self, _state: &V) -> f64 {
         self.elastic.p_wave_modulus()

@@ -92,6 +92,19 @@ pub trait ConstitutiveModel: Send + Sync {
     /// the internal variables of a virgin material point.
     fn initial_state(&self) -> Self::State;
 
+    /// the internal variables that a material point of `previous` carries into this material
+    /// when a run changes the material's parameters between steps (a strength reduction): by
+    /// default `state` as it is. A model whose state holds the size of its yield surface moves
+    /// it with the parameters, so that they take effect (hardening Drucker-Prager shifts its cone
+    /// size `k` by the change of `k0`).
+    fn carried_state(&self, previous: &Self, state: &Self::State) -> Self::State
+    where
+        Self: Sized,
+    {
+        let _ = previous;
+        *state
+    }
+
     /// the constrained (P-wave) modulus `M = ρ c²` of the material at `state` (Pa): the
     /// stiffness of the fastest wave, `c = √(M/ρ)`, that the time step (eq 13) must resolve.
     fn p_wave_modulus(&self, state: &Self::State) -> f64;

@@ -161,6 +161,29 @@ fn run(
 proptest! {
     #![proptest_config(config())]
 
+    /// A material point carried into other parameters (a strength reduction between steps)
+    /// keeps its hardening: the yield function of the new material at the carried state equals
+    /// the old one's at the old state minus the drop of the cone, (k0 − k0') at fixed α, to
+    /// round-off (1e-12 of the stress scale); the back stress and ε̄ᵖ are kept. A new cohesion
+    /// therefore takes effect at once on a hardened point.
+    #[test]
+    fn a_state_carried_into_a_new_cohesion_keeps_its_hardening(
+        (m, sigma, state) in params().prop_flat_map(|p| {
+            point(DruckerPrager::new(p).expect("generated parameters are admissible"))
+        }),
+        c_new in 0.0..100.0f64,
+    ) {
+        let p = DruckerPragerParams { cohesion: c_new, ..*m.params() };
+        let next = DruckerPrager::new(p).unwrap();
+        let carried = next.carried_state(&m, &state);
+        prop_assert_eq!(carried.back_stress, state.back_stress);
+        prop_assert_eq!(carried.eps_p_bar, state.eps_p_bar);
+        let drop = m.k0() - next.k0();
+        let (f_old, f_new) = (m.yield_function(&sigma, &state), next.yield_function(&sigma, &carried));
+        let scale = sigma.norm() + state.k.abs() + m.k0().abs() + next.k0().abs() + 1.0;
+        prop_assert!((f_new - (f_old + drop)).abs() <= 1e-12 * scale, "{} {} {}", f_old, f_new, drop);
+    }
+
     #[test]
     fn elastic_trial_inside_is_returned_unchanged((m, sigma, state, d) in case()) {
         let trial = sigma + m.elasticity().stress_increment(&d);

@@ -309,7 +309,8 @@ impl Simulation {
 
     /// the summary of the run so far: the state's figures (steps, time, Δt, energy ledger and
     /// check, state hash) as [`run_scene`](crate::run_scene) reports them, the runout measures
-    /// and indicators of the last recorded series row (the scene's `series_interval`), status
+    /// and indicators of the last recorded series row (the scene's `series_interval`; in 3D, of
+    /// the state now, as a 3D run's summary closes with a row), status
     /// `Completed` once the scene's end time is reached and `Interrupted` before (a stop at rest
     /// or an energy alarm is the `stopped` of the advance that met it).
     pub fn summary(&mut self) -> Result<RunSummary, RunError> {
@@ -609,7 +610,11 @@ fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
             if solver.step_count() - steps0 >= n || solver.particles().is_empty() {
                 break Ok(RunEnd::EndTime);
             }
-            match solver.step() {
+            // (lands on the next output mark as `run_until` does: `exact_times`)
+            let t = solver.time();
+            let landing = Observer::<M, S, N>::landing(&*driver, t);
+            let cap = if landing > t { landing - t } else { f64::INFINITY };
+            match solver.step_capped(cap) {
                 Err(e) => break Err(e),
                 Ok(report) => {
                     if driver.after_step(solver, &report).is_break() {

@@ -349,7 +349,11 @@ impl SpaceJob for SpaceWorker {
                             if solver.step_count() - steps0 >= n || solver.particles().is_empty() {
                                 break Ok(RunEnd::EndTime);
                             }
-                            match solver.step() {
+                            // (lands on the next output mark as `run_until` does)
+                            let t = solver.time();
+                            let landing = Observer::<M, S, N>::landing(&d, t);
+                            let cap = if landing > t { landing - t } else { f64::INFINITY };
+                            match solver.step_capped(cap) {
                                 Err(e) => break Err(e),
                                 Ok(report) => {
                                     if d.after_step(&solver, &report).is_break() {

@@ -123,6 +123,11 @@ fn exact_times_put_every_record_on_its_mark_and_resume_to_the_same_bytes() {
     // (15 series marks and 4 frame marks, of which 3 coincide with series marks)
     assert!(whole.steps > loose.steps && whole.steps <= loose.steps + 16, "{whole:?}");
     assert!((whole.dt.min / loose.dt.min - 1.0).abs() < 0.01, "{:?} {:?}", whole.dt, loose.dt);
+    // stepped from outside by steps, the run lands on the same marks: the same bits
+    let mut sim = Simulation::new(&exact, None, &mut || false).unwrap();
+    sim.advance(Limit::Steps(whole.steps - 10), &mut || false).unwrap();
+    sim.advance(Limit::Time(0.06), &mut || false).unwrap();
+    assert_eq!(sim.summary().unwrap().state_hash, whole.state_hash, "stepped by steps");
     let stopped = run_scene(&exact, &RunOptions { stop_after: Some(0.025), ..at("part") }).unwrap();
     assert_eq!(stopped.status, mpm_run::RunStatus::Interrupted);
     let resumed = resume(&base.join("part"), &RunOptions::default()).unwrap();

@@ -395,12 +395,15 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 
     /// Replaces the materials' parameters between steps (a strength reduction, a parameter
-    /// changed by a coupled code): `materials` in the order of the present ones, each with the
-    /// state its particles carry (the same model). The particles keep their stresses and
-    /// states; a stress outside a new yield surface returns to it in the next step, where the
-    /// ledger books the plastic work. The change of stored elastic energy at the present
-    /// stresses (another stiffness) is booked as external work, so that the residual does not
-    /// move; the stability limit of Δt follows the new stiffness from the next step.
+    /// changed by a coupled code): `materials` in the order of the present ones, of the same
+    /// model. The particles keep their stresses; their states are carried into the new
+    /// parameters ([`ConstitutiveModel::carried_state`]: a hardening cone's size moves with
+    /// them). The change of stored elastic energy at the present stresses (another stiffness) is
+    /// booked as external work, so that the residual does not move here; the stability limit of
+    /// Δt follows the new stiffness from the next step. A stress left outside a new yield
+    /// surface returns to it in the next step, whose return books σ : Δεᵖ at the returned
+    /// stress: the residual then moves by ½ Σ V Δσ : C⁻¹ : Δσ of that return (second order in
+    /// the change: small for a gradual reduction, a jump for a large one).
     ///
     /// Refused, with nothing changed: another number of materials (the value is the count
     /// given).
@@ -413,6 +416,13 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
             });
         }
         let before = par::sum(self.particles.len(), |i| self.strain_of(i));
+        // (each particle's state as its model carries it into the new parameters: a hardening
+        // cone's size moves with them)
+        let p = &mut self.particles;
+        for (state, &m) in p.state.iter_mut().zip(&p.material) {
+            let m = usize::from(m);
+            *state = materials[m].carried_state(&self.materials[m], state);
+        }
         self.materials = materials;
         self.p_modulus =
             self.materials.iter().map(|m| m.p_wave_modulus(&m.initial_state())).collect();

@@ -248,6 +248,17 @@ macro_rules! registry {
                 }
             }
 
+            fn carried_state(&self, previous: &Self, state: &AnyState) -> AnyState {
+                match (self, previous, state) {
+                    $(
+                        (AnyModel::$variant(m), AnyModel::$variant(p), AnyState::$variant(s)) => {
+                            AnyState::$variant(ConstitutiveModel::carried_state(m, p, s))
+                        }
+                    )*
+                    _ => *state,
+                }
+            }
+
             fn p_wave_modulus(&self, state: &AnyState) -> f64 {
                 match (self, state) {
                     $( (AnyModel::$variant(m), AnyState::$variant(s)) => ConstitutiveModel::p_wave_modulus(m, s), )*

@@ -58,11 +58,13 @@ pub(super) fn build(
         ));
     }
     if let Some(c) = o.checkpoint_interval {
-        if !finite_pos(c) {
+        // (a bound like the frames': with `exact_times` every mark is also a step's end)
+        if !(finite_pos(c) && end_time / c <= 1e6) {
             return Err(ctx.range(
                 "output.checkpoint_interval",
                 c,
-                "0 < checkpoint_interval (s of simulated time)",
+                "0 < checkpoint_interval, at most 1e6 checkpoints over end_time (s of simulated \
+                 time)",
                 "give the simulated time between checkpoints, or remove it",
             ));
         }
