@@ -446,3 +446,22 @@ def test_a_simulation_is_steered_between_steps(tmp_path):
     assert "young = 2000000.0" in (tmp_path / "steered" / "scene.toml").read_text()
     sim.advance_to(0.2)
     assert gm.resume(tmp_path / "steered").summary["state_hash"] == sim.summary()["state_hash"]
+
+
+def test_a_sweep_stacks_a_series_on_common_times():
+    # with series=, each run lands its rows on the k·series_interval marks (exact_times), so
+    # the runs share their times exactly (to the slack of the output's slots, 1e-9 of an
+    # interval) and stack without interpolation; the friction changes the slide
+    table = gm.sweep(
+        "sliding_inclined", "boundaries.ground.friction", [0.2, 0.4], processes=1, series="runout"
+    )
+    rows = table.to_dict("list") if hasattr(table, "to_dict") else table
+    value, time = np.asarray(rows["value"]), np.asarray(rows["time"])
+    a, b = time[value == 0.2], time[value == 0.4]
+    assert len(a) == len(b) > 10 and np.array_equal(a, b)
+    interval = a[1] - a[0]
+    assert np.allclose(a / interval, np.round(a / interval), rtol=0, atol=1e-9)
+    front = np.asarray(rows["front_x"])
+    assert front[value == 0.2][-1] > front[value == 0.4][-1]
+    with pytest.raises(ValueError, match="series"):
+        gm.sweep("sliding_inclined", "boundaries.ground.friction", [0.2], series="walls2")

@@ -557,11 +557,17 @@ def _threads(threads: Optional[int]) -> Optional[int]:
     return int(threads)
 
 
-def _sweep_one(scene: Scene, path: str, value: Any, threads: int) -> Dict[str, Any]:
-    """One run of a sweep (in a worker process): the value and the summary's scalars."""
+def _sweep_one(
+    scene: Scene, path: str, value: Any, threads: int, series: Optional[str] = None
+) -> Dict[str, Any]:
+    """One run of a sweep (in a worker process): the value and the summary's scalars (and the
+    series named, under ``"_series"``)."""
     scene = scene.copy().set(path, value)
+    rows = None
     try:
-        s = run(scene, threads=threads).summary
+        r = run(scene, threads=threads)
+        s = r.summary
+        rows = r.series(series) if series else None
     except SolverError as e:
         # one run's instability is that row's result: the others are kept
         s = json.loads(getattr(e, "summary_json", "") or "{}")
@@ -576,6 +582,8 @@ def _sweep_one(scene: Scene, path: str, value: Any, threads: int) -> Dict[str, A
     for key, v in (s.get("runout") or {}).items():
         if isinstance(v, (int, float)) or v is None:
             row[key] = v
+    if series:
+        row["_series"] = rows
     return row
 
 
@@ -585,6 +593,7 @@ def sweep(
     values: Sequence[Any],
     processes: Optional[int] = None,
     threads: int = 1,
+    series: Optional[str] = None,
 ) -> Any:
     """Runs ``scene`` once per value of the field ``path`` and returns one table: a row per
     value, in their order, with ``value``, ``status``, ``steps``, ``simulated_time`` and the
@@ -599,6 +608,12 @@ def sweep(
     other rows stand. ``values`` is a list or a NumPy array. The workers are processes: where
     Python starts them afresh (macOS, Windows), call ``sweep`` under
     ``if __name__ == "__main__":``.
+
+    With ``series`` (``"energy"``, ``"runout"``, ...), the table is that series of every run
+    stacked instead: a ``value`` column, then the series' columns, a run's rows after the
+    previous run's. Each run then has ``output.exact_times = true``, so every row falls on a
+    ``k · series_interval`` mark and the runs share their times (a run the solver stopped
+    contributes no rows).
 
     >>> table = sweep("sliding_inclined", "boundaries.ground.friction", [0.3, 0.4],
     ...               processes=1)
@@ -615,6 +630,10 @@ def sweep(
         values = [v.item() if isinstance(v, np.generic) else v for v in values]
     except TypeError:
         raise ValueError("values: give a list of the field's values, e.g. [20.0, 25.0, 30.0]")
+    if series is not None:
+        if series not in SERIES:
+            raise ValueError(f"series = {series!r}: give one of {', '.join(SERIES)}")
+        base = base.copy().set("output.exact_times", True)
     for v in values:
         base.copy().set(path, v)  # refused here, before any run
     workers = processes if processes is not None else max(1, (os.cpu_count() or 1) // threads)
@@ -624,7 +643,24 @@ def sweep(
 
     n = len(values)
     with ProcessPoolExecutor(max_workers=min(int(workers), max(n, 1))) as pool:
-        rows = list(pool.map(_sweep_one, [base] * n, [path] * n, list(values), [threads] * n))
+        rows = list(
+            pool.map(_sweep_one, [base] * n, [path] * n, list(values), [threads] * n, [series] * n)
+        )
+    if series is not None:
+        stacked: Dict[str, List[Any]] = {"value": []}
+        for r in rows:
+            data = r.get("_series")
+            if not data:
+                continue
+            count = len(next(iter(data.values())))
+            stacked["value"] += [r["value"]] * count
+            for k, col in data.items():
+                stacked.setdefault(k, []).extend(col.tolist())
+        try:
+            import pandas as pd  # type: ignore
+        except ImportError:
+            return {k: np.asarray(v) for k, v in stacked.items()}
+        return pd.DataFrame(stacked)
     keys: List[str] = []
     for r in rows:
         keys += [k for k in r if k not in keys]
