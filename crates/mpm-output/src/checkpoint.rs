@@ -82,6 +82,30 @@ pub struct CheckpointFile {
     pub inputs: Vec<mpm_scene::inputs::InputFile>,
 }
 
+impl CheckpointFile {
+    /// a checkpoint of this build ([`FORMAT`], this version) of a scene (its `origin`, text,
+    /// files' folder and input files) at `state`, with the output `history` so far.
+    pub fn new(
+        origin: &str,
+        scene_text: &str,
+        scene_dir: Option<&str>,
+        inputs: &[mpm_scene::inputs::InputFile],
+        state: SavedState,
+        history: History,
+    ) -> Self {
+        CheckpointFile {
+            format: FORMAT,
+            code_version: env!("CARGO_PKG_VERSION").to_string(),
+            origin: origin.to_string(),
+            scene_text: scene_text.to_string(),
+            state,
+            history,
+            scene_dir: scene_dir.map(str::to_string),
+            inputs: inputs.to_vec(),
+        }
+    }
+}
+
 /// writes `c` to `path` atomically, with its header.
 pub fn write(path: &Path, c: &CheckpointFile) -> Result<(), OutputError> {
     let payload = bincode::serde::encode_to_vec(c, bincode::config::standard()).map_err(|e| {

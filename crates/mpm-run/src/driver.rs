@@ -483,16 +483,14 @@ impl Driver<'_> {
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        let file = CheckpointFile {
-            format: checkpoint::FORMAT,
-            code_version: env!("CARGO_PKG_VERSION").to_string(),
-            origin: self.scene.origin().to_string(),
-            scene_text: self.scene.text().to_string(),
-            state: M::wrap(solver.checkpoint()),
-            history: self.history.clone(),
-            scene_dir: self.scene.files_dir().map(str::to_string),
-            inputs: self.scene.inputs().to_vec(),
-        };
+        let file = CheckpointFile::new(
+            self.scene.origin(),
+            self.scene.text(),
+            self.scene.files_dir(),
+            self.scene.inputs(),
+            M::wrap(solver.checkpoint()),
+            self.history.clone(),
+        );
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
     }
 

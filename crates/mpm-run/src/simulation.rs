@@ -553,16 +553,14 @@ impl Job for Worker {
                 }
                 Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
                     &dir,
-                    CheckpointFile {
-                        format: checkpoint::FORMAT,
-                        code_version: env!("CARGO_PKG_VERSION").to_string(),
-                        origin: current.origin().to_string(),
-                        scene_text: current.text().to_string(),
-                        state: M::wrap(solver.checkpoint()),
-                        history: history.clone(),
-                        scene_dir: current.files_dir().map(str::to_string),
-                        inputs: current.inputs().to_vec(),
-                    },
+                    CheckpointFile::new(
+                        current.origin(),
+                        current.text(),
+                        current.files_dir(),
+                        current.inputs(),
+                        M::wrap(solver.checkpoint()),
+                        history.clone(),
+                    ),
                 )),
                 _ if failed => {
                     Reply::Set(Err(RunError::Setup("the simulation failed earlier".into())))

@@ -430,16 +430,14 @@ impl SpaceJob for SpaceWorker {
                 }
                 Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
                     &dir,
-                    CheckpointFile {
-                        format: checkpoint::FORMAT,
-                        code_version: env!("CARGO_PKG_VERSION").to_string(),
-                        origin: current.origin().to_string(),
-                        scene_text: current.text().to_string(),
-                        state: M::wrap_space(solver.checkpoint()),
-                        history: history.clone(),
-                        scene_dir: current.files_dir().map(str::to_string),
-                        inputs: current.inputs().to_vec(),
-                    },
+                    CheckpointFile::new(
+                        current.origin(),
+                        current.text(),
+                        current.files_dir(),
+                        current.inputs(),
+                        M::wrap_space(solver.checkpoint()),
+                        history.clone(),
+                    ),
                 )),
                 _ if failed => {
                     Reply::Set(Err(RunError::Setup("the simulation failed earlier".into())))
@@ -710,22 +708,26 @@ impl<'a> SpaceDriver<'a> {
         }
     }
 
+    /// the marks `[output] exact_times` lands on: series rows, frames, checkpoints.
+    fn marks(&self) -> [Option<f64>; 3] {
+        let o = &self.scene.output;
+        [Some(o.series_interval), Some(o.interval), o.checkpoint_interval]
+    }
+
     /// writes `checkpoint.bin` (atomically): the solver state, the scene and the history.
     fn write_checkpoint<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
         &self,
         solver: &Solver<M, S, N>,
     ) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        let file = CheckpointFile {
-            format: checkpoint::FORMAT,
-            code_version: env!("CARGO_PKG_VERSION").to_string(),
-            origin: self.scene.origin().to_string(),
-            scene_text: self.scene.text().to_string(),
-            state: M::wrap_space(solver.checkpoint()),
-            history: self.history(),
-            scene_dir: self.scene.files_dir().map(str::to_string),
-            inputs: self.scene.inputs().to_vec(),
-        };
+        let file = CheckpointFile::new(
+            self.scene.origin(),
+            self.scene.text(),
+            self.scene.files_dir(),
+            self.scene.inputs(),
+            M::wrap_space(solver.checkpoint()),
+            self.history(),
+        );
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &file)?)
     }
 
@@ -1104,9 +1106,7 @@ impl<'a> SpaceDriver<'a> {
 impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for SpaceDriver<'_> {
     fn after_step(&mut self, solver: &Solver<M, S, N>, report: &StepReport) -> ControlFlow<()> {
         let scene = self.scene;
-        let o = &scene.output;
-        let marks = [Some(o.series_interval), Some(o.interval), o.checkpoint_interval];
-        let landed = on_mark(report.time, o.exact_times, &marks);
+        let landed = on_mark(report.time, scene.output.exact_times, &self.marks());
         // (a step shortened to land on the end time or an output mark is not the smallest)
         if (!landed && !mpm_solver3d::reached(report.time, scene.end_time)) || self.dt.max == 0.0 {
             self.dt.min = self.dt.min.min(report.dt);
@@ -1158,12 +1158,7 @@ impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Observer<M, S, N> for 
     }
 
     fn landing(&self, time: f64) -> f64 {
-        let o = &self.scene.output;
-        next_mark(
-            time,
-            o.exact_times,
-            &[Some(o.series_interval), Some(o.interval), o.checkpoint_interval],
-        )
+        next_mark(time, self.scene.output.exact_times, &self.marks())
     }
 }
 
