@@ -17,19 +17,19 @@
 use std::path::Path;
 
 use crate::error::DemError;
+use crate::limits::Budget;
 use crate::raster::{MAX_CELLS, Raster};
-use crate::read::Budget;
 
 /// Reads the ESRI ASCII grid at `path`, within `budget` bytes of memory if given.
 pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
     use std::io::Read;
     let file = path.display().to_string();
-    let size = crate::read::regular_file(path)?;
+    let size = crate::limits::regular_file(path)?;
     // the text is read whole: refused before reading when it alone does not fit
     if let Some((room, _)) = budget
         && size > room
     {
-        return Err(crate::read::too_big(&file, None, size, budget));
+        return Err(crate::limits::too_big(&file, None, size, budget));
     }
     // at most the length the file had when it was looked at (a file still growing is cut)
     let mut bytes = Vec::new();
@@ -242,7 +242,7 @@ pub(crate) fn parse(
     // the heights beside the text already read
     let need = declared.saturating_mul(8).saturating_add(text.len() as u64);
     if budget.is_some_and(|(room, _)| need > room) {
-        return Err(crate::read::too_big(file, Some((cols, rows)), need, budget));
+        return Err(crate::limits::too_big(file, Some((cols, rows)), need, budget));
     }
     let n = declared as usize;
     let mut z = Vec::with_capacity(n);

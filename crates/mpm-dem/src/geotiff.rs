@@ -17,8 +17,8 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use crate::error::DemError;
+use crate::limits::Budget;
 use crate::raster::{MAX_CELLS, Raster};
-use crate::read::Budget;
 
 /// The largest compression ratio a raster's declared size may imply before it is decoded.
 const MAX_COMPRESSION: u64 = 1024;
@@ -36,7 +36,7 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
     let io = |source| DemError::Io { file: file.clone(), source };
     let problem = |p: String| DemError::GeoTiff { file: file.clone(), problem: p };
     let tiff = |e: tiff::TiffError| problem(format!("not a readable TIFF: {e}"));
-    crate::read::regular_file(path)?;
+    crate::limits::regular_file(path)?;
     let f = File::open(path).map_err(io)?;
     let bytes = f.metadata().map_err(io)?.len();
     let mut limits = Limits::default();
@@ -62,7 +62,7 @@ pub fn read(path: &Path, budget: Budget) -> Result<Raster, DemError> {
     // the decoded image and the heights as f64
     let need = declared + cols * rows * 8;
     if budget.is_some_and(|(room, _)| need > room) {
-        return Err(crate::read::too_big(&file, Some((cols, rows)), need, budget));
+        return Err(crate::limits::too_big(&file, Some((cols, rows)), need, budget));
     }
     if compression == 1 && declared > bytes {
         return Err(size(format!(

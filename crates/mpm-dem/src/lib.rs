@@ -33,9 +33,10 @@
 pub mod ascii;
 mod error;
 pub mod geotiff;
+mod limits;
 mod raster;
 mod read;
 
 pub use error::DemError;
+pub use limits::Budget;
 pub use raster::{Crs, MAX_CELLS, MAX_HEIGHT, Raster, Station};
-pub use read::Budget;
