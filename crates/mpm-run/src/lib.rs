@@ -53,18 +53,21 @@
 // range, fix); it is returned once, before any step, so its size costs nothing.
 #![allow(clippy::result_large_err)]
 
+mod common;
 mod driver;
 mod element;
 mod error;
 mod loads;
 mod options;
 mod progress;
+mod resume;
 mod run;
 mod simulation;
 mod space;
 
 pub use progress::{Progress, ProgressSink};
 
+pub use common::CheckReport;
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
 pub use mpm_output::OutputError;
@@ -72,7 +75,8 @@ pub use mpm_output::checkpoint::FILE_NAME as CHECKPOINT_FILE;
 pub use mpm_scene::materials::AnyModel;
 pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use options::{MAX_THREADS, available_threads};
-pub use run::{CheckReport, RunOptions, check_scene, resume, run_scene};
+pub use resume::resume;
+pub use run::{RunOptions, check_scene, run_scene};
 pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation, SpaceFields};
 pub use space::{check_space_scene, run_space_scene};
 // The scene library, re-exported so that a front end needs one import path.

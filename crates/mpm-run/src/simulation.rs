@@ -27,6 +27,8 @@ use mpm_scene::materials::ModelJob;
 use mpm_scene::{RunStatus, RunSummary, Scene};
 use mpm_solver::{EnergyLedger, Observer, RunEnd, Solver, SolverError, Vector};
 
+mod space;
+
 use crate::driver::{Driver, initial_state};
 use crate::error::RunError;
 use crate::options::RunOptions;
@@ -161,7 +163,7 @@ impl Simulation {
     ) -> Result<Simulation, RunError> {
         let scene = scene.clone();
         Self::start(3, scene.seeds.len(), threads, poll, move |job, outbox| {
-            if let Err(e) = mpm_scene::dispatch_space(&scene, crate::space::SpaceWorker(job)) {
+            if let Err(e) = mpm_scene::dispatch_space(&scene, space::SpaceWorker(job)) {
                 let _ = outbox.send(Reply::Failed(e.into()));
             }
         })
