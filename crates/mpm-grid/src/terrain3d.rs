@@ -486,8 +486,8 @@ mod tests {
                 assert!((at - x).length() < 1e-12, "{at} vs {x}");
                 assert!(ident.abs_diff_eq(crate::Matrix::IDENTITY, 1e-11), "{ident}");
                 let d = 1e-6;
-                for axis in 0..3 {
-                    let step = Vector::AXES[axis] * d;
+                for (axis, unit) in Vector::AXES.iter().enumerate() {
+                    let step = *unit * d;
                     let (fp, fm) = (shape.factors(x + step), shape.factors(x - step));
                     let (Ok((np, fp)), Ok((nm, fm))) = (fp, fm) else { continue };
                     if np != first || nm != first {

@@ -143,7 +143,10 @@ pub enum TimeStep {
 /// The paper's advice, Δt ≈ 0.1 L/c (§2(4)): the Courant number a scene gets by default.
 pub const DEFAULT_COURANT: Real = 0.1;
 
-/// The explicit scheme's stability bound on the Courant number (eq 13).
+/// The explicit scheme's stability bound on the Courant number (eq 13): the scene's Courant
+/// number, a fixed Δt's, the true Courant number Δt·s̃_p/L of every particle with its true
+/// signal s̃_p (`stages/timestep.rs`'s module docs) and a step's displacement in cells are all
+/// held to it.
 pub const MAX_COURANT: Real = 1.0;
 
 /// Nodes lighter than this fraction of the mean particle mass take body force only (§2(3)): the
@@ -442,7 +445,7 @@ impl SolverConfig {
     /// checks every setting's range; the error names the setting, its value and the admissible range.
     pub fn validate(&self) -> Result<(), SolverError> {
         match self.time_step {
-            TimeStep::Courant(c) if !(c > 0.0 && c <= 1.0) => {
+            TimeStep::Courant(c) if !(c > 0.0 && c <= MAX_COURANT) => {
                 return Err(SolverError::InvalidSetting {
                     name: "courant",
                     value: c,

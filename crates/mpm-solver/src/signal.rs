@@ -5,12 +5,8 @@
 
 use mpm_constitutive::ConstitutiveModel;
 
-use crate::config::TimeStep;
+use crate::config::{MAX_COURANT, TimeStep};
 use crate::math::Real;
-
-/// The largest Courant number Δt·s̃_p/L any particle may have with its true signal s̃_p
-/// (`stages/timestep.rs`'s module docs): eq 13's own stability bound.
-pub const TRUE_COURANT_MAX: Real = 1.0;
 
 /// The largest Δt for which a particle at speed `v` under gravity `g` moves at most `d`:
 /// the root of v Δt + ½ g Δt² = d (+∞ when nothing moves). The time step's second bound
@@ -58,11 +54,11 @@ pub fn stable_dt(
         }
         TimeStep::Fixed(dt) => {
             let courant = dt * signal / cell;
-            if courant > 1.0 {
+            if courant > MAX_COURANT {
                 return Err(StepLimit::Courant { courant, dt });
             }
             let cells = (v_max * dt + 0.5 * gravity * dt * dt) / cell;
-            if cells > TRUE_COURANT_MAX {
+            if cells > MAX_COURANT {
                 return Err(StepLimit::Displacement { cells, dt });
             }
             Ok(dt)

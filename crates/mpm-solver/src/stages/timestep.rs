@@ -9,7 +9,7 @@
 //! ŝ_p = ĉ_p + |v_p| its capped signal (ĉ_p = √(M/max(ρ_p, ρ_ref)), ρ_ref the lightest initial
 //! density of the particle's material). So a particle compacted above ρ_ref counts with its
 //! current density; a dilated one with ρ_ref, but never so far that its own Courant number
-//! Δt·s̃_p/L exceeds C_max = 1 ([`TRUE_COURANT_MAX`](crate::signal::TRUE_COURANT_MAX)). Eq 13 with the current density alone lets
+//! Δt·s̃_p/L exceeds C_max = 1 ([`MAX_COURANT`](crate::MAX_COURANT)). Eq 13 with the current density alone lets
 //! the loosest particle set Δt for everyone, and the loosest particles are those that have
 //! separated from the mass: grains thrown off the free surface or the front, whose volume grows
 //! by the FLIP strain increments of the few nodes they share with nothing, carry no stress (a
@@ -42,9 +42,7 @@ use crate::config::TimeStep;
 use crate::error::{Field, SolverError};
 use crate::math::Real;
 use crate::par::{chunk_len, reduce_chunks};
-use crate::signal::{
-    Fastest, SLOWEST, StepLimit, TRUE_COURANT_MAX, particle_signal, stable_dt, wave_modulus,
-};
+use crate::signal::{Fastest, SLOWEST, StepLimit, particle_signal, stable_dt, wave_modulus};
 use crate::solver::Solver;
 
 impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N> {
@@ -52,7 +50,7 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     /// for a fixed Δt, whose Courant number is the true one.
     pub(crate) fn true_signal_weight(&self) -> Real {
         match self.config.time_step {
-            TimeStep::Courant(c) => c / TRUE_COURANT_MAX,
+            TimeStep::Courant(c) => c / crate::MAX_COURANT,
             TimeStep::Fixed(_) => 1.0,
         }
     }
@@ -268,7 +266,7 @@ mod tests {
         let c_true = (s.materials()[0].p_wave_modulus() * s.particles().volume[1]
             / s.particles().mass[1])
             .sqrt();
-        assert!(dt * c_true / 0.25 <= crate::signal::TRUE_COURANT_MAX * (1.0 + DT_TOL));
+        assert!(dt * c_true / 0.25 <= crate::MAX_COURANT * (1.0 + DT_TOL));
     }
 
     #[test]
