@@ -8,7 +8,7 @@
 //! - [`embedded_scene`] returns the paper's scenes compiled into the binary (the default is the
 //!   dry-sand flume of §7).
 //! - [`run_scene`] runs a scene with [`RunOptions`] and returns a [`RunSummary`] (also written
-//!   as `summary.json`); [`resume`] continues a run from its checkpoint bit-identically;
+//!   as `summary.json`); [`resume()`] continues a run from its checkpoint bit-identically;
 //!   [`check_scene`] validates fully without stepping.
 //! - [`Simulation`] is a run advanced by its caller, step by step or to a time, with the
 //!   particles' fields, the energy ledger and checkpoints between calls (for bindings and

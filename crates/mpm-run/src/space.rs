@@ -8,10 +8,10 @@
 //! the front, tail, thickness (over the whole width) and travel angle follow that direction;
 //! the centre of mass's travel is its 3D distance. Checkpoints (every
 //! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
-//! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume`]
+//! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume()`]
 //! routes a 3D scene here). Not yet in 3D: probes and envelopes. The plots
 //! are the energy, the runout and the deposit in plan; `hazard_maps` adds the maps of `maps/`.
-//! [`SpaceWorker`] serves a 3D [`crate::Simulation`] with the same driver.
+//! The 3D worker of [`crate::Simulation`] (`simulation/space.rs`) records through this driver.
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -175,7 +175,7 @@ pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSumma
 }
 
 /// Continues the 3D run of checkpoint `c` (read from `dir`, its scene checked against the
-/// folder's by [`crate::resume`]) to its end time, writing into `dir`.
+/// folder's by [`crate::resume()`]) to its end time, writing into `dir`.
 pub(crate) fn resume_space(
     dir: &Path,
     c: CheckpointFile,

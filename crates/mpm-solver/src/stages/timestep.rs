@@ -9,11 +9,11 @@
 //! ŝ_p = ĉ_p + |v_p| its capped signal (ĉ_p = √(M/max(ρ_p, ρ_ref)), ρ_ref the lightest initial
 //! density of the particle's material). So a particle compacted above ρ_ref counts with its
 //! current density; a dilated one with ρ_ref, but never so far that its own Courant number
-//! Δt·s̃_p/L exceeds C_max = 1 ([`MAX_COURANT`](crate::MAX_COURANT)). Eq 13 with the current density alone lets
-//! the loosest particle set Δt for everyone, and the loosest particles are those that have
-//! separated from the mass: grains thrown off the free surface or the front, whose volume grows
-//! by the FLIP strain increments of the few nodes they share with nothing, carry no stress (a
-//! cohesionless material cannot hold the tension) and transmit no wave. Their √(V_p/V_0) made
+//! Δt·s̃_p/L exceeds C_max = 1 ([`MAX_COURANT`](crate::MAX_COURANT)). Eq 13 with the current
+//! density alone lets the loosest particle set Δt for everyone, and the loosest particles are
+//! those that have separated from the mass: grains thrown off the free surface or the front,
+//! whose volume grows by the FLIP strain increments of the few nodes they share with nothing,
+//! carry no stress (a cohesionless material cannot hold the tension) and transmit no wave. Their √(V_p/V_0) made
 //! the flume take 2.7× and a collapsing cohesionless column 3–5× the steps of the initial
 //! estimate. The bound keeps what eq 13 is for: at C = 0.1 a grain must dilate a hundredfold
 //! before it shortens Δt, at C = 0.8 by 1.56 (without the bound, a flume at C = 0.4 threw a
