@@ -16,6 +16,11 @@
 //! - the rough base as stuck nodes (`"rough"`), and as Coulomb friction at the glued grains'
 //!   angle (29.5°) for comparison.
 //!
+//! Beside the sand, glass beads with the μ(I) rheology (Jop, Forterre & Pouliquen 2006's
+//! parameters, [`MU_I_BEADS`]), the grains of Lajeunesse et al.'s experiments: a friction that
+//! grows with the flow's inertial number against the sand's one constant angle, from a = 0.5
+//! to 8, in plane strain (with and without the channel's walls) and in 3D.
+//!
 //! References: quasi-2D (Lube et al. 2005; Lajeunesse, Monnier & Homsy 2005, Phys. Fluids 17,
 //! 103302) (L∞ − L0)/L0 = 1.2 a below a = 1.8, 1.9 a^(2/3) above 2.8, the band between;
 //! H∞/L0 = a for short columns, a^(2/5) for tall ones. Axisymmetric (Lube, Huppert, Sparks &
@@ -33,6 +38,14 @@ use mpm_run::{RunOptions, RunStatus};
 
 /// The sand's friction angle (°): Lube et al. 2005's fine sand, its angle of repose.
 const PHI: f64 = 29.5;
+/// The glass beads' μ(I) rheology as Jop, Forterre & Pouliquen (2006, Nature 441, 727–730)
+/// fitted it to 0.53 mm beads: μ_s = tan 20.9°, μ_2 = tan 32.76°, I_0 = 0.279, grain density
+/// 2 450 kg/m³ (as quoted by secondary sources: not read here in the original); bulk density at a
+/// solid fraction of 0.6 (the dense flows' 0.58–0.62).
+const MU_I_BEADS: &str = "kind = \"mu_i\"\nyoung = 2.0e6\npoisson = 0.3\ndensity = 1470.0\n\
+     mu_s = 0.3819\nmu_2 = 0.6435\ni0 = 0.279\ngrain_diameter = 0.53e-3\ngrain_density = 2450.0\n";
+/// The beads' static friction angle (°), μ_s = tan 20.9°.
+const MU_I_STATIC_DEG: f64 = 20.9;
 /// The quasi-2D channel's width (m).
 const CHANNEL: f64 = 0.1;
 /// A deposit at rest: kinetic energy below this fraction of its peak for 0.3 s.
@@ -49,6 +62,9 @@ pub enum Model {
     DpOuter,
     /// Drucker-Prager through the triaxial-extension corners.
     DpInner,
+    /// the μ(I) rheology with the glass beads of Jop, Forterre & Pouliquen (2006) — not the
+    /// sand: a rate-dependent friction set against the constant one.
+    MuI,
 }
 
 impl Model {
@@ -58,7 +74,23 @@ impl Model {
             Model::DpPlaneStrain => "DP plane-strain cone",
             Model::DpOuter => "DP outer cone",
             Model::DpInner => "DP inner cone",
+            Model::MuI => "μ(I) glass beads",
         }
+    }
+
+    /// how much farther than the sand's grid this model's grid reaches in `dim`: the beads run
+    /// up to 90 % beyond the experiments in plane strain.
+    fn reach(self, dim: u8) -> f64 {
+        match (self, dim) {
+            (Model::MuI, 2) => 1.2,
+            (Model::MuI, _) => 1.3,
+            _ => 1.0,
+        }
+    }
+
+    /// the static friction angle (°): the sand's, or the beads' μ_s = tan 20.9°.
+    fn static_angle(self) -> f64 {
+        if self == Model::MuI { MU_I_STATIC_DEG } else { PHI }
     }
 
     fn toml(self) -> String {
@@ -73,6 +105,7 @@ impl Model {
             }
             Model::DpOuter => "kind = \"drucker_prager\"\ncone_match = \"outer\"\n".into(),
             Model::DpInner => "kind = \"drucker_prager\"\ncone_match = \"inner\"\n".into(),
+            Model::MuI => return MU_I_BEADS.into(),
         };
         format!("{kind}{common}")
     }
@@ -83,21 +116,21 @@ impl Model {
 pub enum Base {
     /// stuck nodes.
     Rough,
-    /// Coulomb friction at the glued grains' angle (the sand's).
+    /// Coulomb friction at the glued grains' static angle (the sand's 29.5°, the beads' 20.9°).
     Glued,
 }
 
 impl Base {
-    fn name(self) -> &'static str {
+    fn name(self, model: Model) -> String {
         match self {
-            Base::Rough => "rough (stuck)",
-            Base::Glued => "Coulomb 29.5°",
+            Base::Rough => "rough (stuck)".into(),
+            Base::Glued => format!("Coulomb {}°", model.static_angle()),
         }
     }
-    fn toml(self) -> String {
+    fn toml(self, model: Model) -> String {
         match self {
             Base::Rough => "\"rough\"".into(),
-            Base::Glued => format!("{{ friction_angle_deg = {PHI} }}"),
+            Base::Glued => format!("{{ friction_angle_deg = {} }}", model.static_angle()),
         }
     }
 }
@@ -162,7 +195,7 @@ impl Case {
             self.dim,
             self.a,
             self.model.name(),
-            self.base.name(),
+            self.base.name(self.model),
             walls,
             self.resolution
         )
@@ -222,7 +255,7 @@ impl Section {
         let dx = l0 / f64::from(c.resolution);
         let h0 = c.a * l0;
         let (_, upper) = experiment_runout_of(true, c.a);
-        let nx = ((l0 * (1.0 + 1.6 * upper) + 2.0 * dx) / dx).ceil() as u32;
+        let nx = ((l0 * (1.0 + 1.6 * c.model.reach(2) * upper) + 2.0 * dx) / dx).ceil() as u32;
         let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
         let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(3.0);
         Self { l0, dx, h0, nx, ny, end }
@@ -248,7 +281,7 @@ fn scene_2d(c: &Case) -> String {
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
-        ground = c.base.toml(),
+        ground = c.base.toml(c.model),
         pic = c.pic_toml(dx),
     )
 }
@@ -260,7 +293,7 @@ fn scene_3d(c: &Case) -> String {
     let dx = r0 / f64::from(c.resolution);
     let h0 = c.a * r0;
     let (_, upper) = experiment_runout(3, c.a);
-    let reach = r0 * (1.0 + 1.5 * upper) + 2.0 * dx;
+    let reach = r0 * (1.0 + 1.5 * c.model.reach(3) * upper) + 2.0 * dx;
     let n = (reach / dx).ceil() as u32;
     let ny = ((1.3 * h0 + 3.0 * dx) / dx).ceil() as u32;
     let end = (12.0 * (2.0 * h0 / 9.81).sqrt()).max(2.0);
@@ -283,7 +316,7 @@ fn scene_3d(c: &Case) -> String {
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
-        ground = c.base.toml(),
+        ground = c.base.toml(c.model),
         pic = c.pic_toml(dx),
     )
 }
@@ -309,7 +342,7 @@ fn scene_channel(c: &Case, delta: f64) -> String {
          [output]\ninterval = {end}\nseries_interval = 0.01\nplots = false\nvtk = false\n",
         label = c.label(),
         material = c.model.toml(),
-        ground = c.base.toml(),
+        ground = c.base.toml(c.model),
         pic = c.pic_toml(dx),
     )
 }
@@ -399,7 +432,9 @@ pub fn cases(quick: bool) -> Vec<Case> {
     for d in [15.0, 25.0] {
         out.push(case(2, 1.0, Model::MohrCoulomb, Base::Rough, 40, Some(d)));
     }
-    out.push(case(2, 1.0, Model::MohrCoulomb, Base::Glued, 20, Some(25.0)));
+    for &a in &[1.0, 2.0, 4.0, 8.0] {
+        out.push(case(2, a, Model::MohrCoulomb, Base::Glued, 20, Some(25.0)));
+    }
     // axisymmetric: the three models at R0/Δx = 8 (a 3D run at 10 or more takes 10–40 min on
     // two cores: the convergence study in 3D is left to a larger machine)
     for &a in &[1.0, 2.0] {
@@ -419,6 +454,24 @@ pub fn cases(quick: bool) -> Vec<Case> {
         let glued = case(3, 1.0, Model::MohrCoulomb, Base::Glued, res, None);
         out.push(glued.clone());
         out.push(Case { pic: Some(Pic::Noise), ..glued });
+    }
+    // the aspect ratios 0.5 to 8 on the glued base at R0/Δx = 8 (a = 8 takes about 40 min on
+    // one core): which way the error turns as the columns get taller
+    for &a in &[0.5, 4.0, 8.0] {
+        out.push(case(3, a, Model::MohrCoulomb, Base::Glued, 8, None));
+    }
+    // a friction that grows with the flow's inertial number against one constant friction: the
+    // μ(I) beads in plane strain (both bases, and between the channel's walls) and in 3D, with
+    // the sand's plane-strain column at a = 8 for the trend
+    out.push(case(2, 8.0, Model::MohrCoulomb, Base::Rough, 20, None));
+    out.push(case(2, 8.0, Model::MohrCoulomb, Base::Glued, 20, None));
+    for &a in &[0.5, 1.0, 2.0, 4.0, 8.0] {
+        out.push(case(2, a, Model::MuI, Base::Rough, 20, None));
+        out.push(case(2, a, Model::MuI, Base::Glued, 20, None));
+        out.push(case(2, a, Model::MuI, Base::Glued, 20, Some(25.0)));
+    }
+    for &a in &[1.0, 2.0, 4.0, 8.0] {
+        out.push(case(3, a, Model::MuI, Base::Glued, 8, None));
     }
     // the side-wall term against the channel it stands for: the 2D runs with δ = 25° at
     // L0/Δx = 10 against the column extruded 0.1 m between two 25° walls in 3D
@@ -492,7 +545,7 @@ pub fn run(quick: bool) -> anyhow::Result<bool> {
             c.dim,
             c.a,
             c.model.name(),
-            c.base.name(),
+            c.base.name(c.model),
             c.wall_deg.map_or("none".into(), |d| d.to_string()),
             c.pic.map_or("0.001 per step".into(), Pic::name),
             c.resolution,
@@ -563,7 +616,7 @@ fn table(rows: &[Row]) -> String {
             c.dim,
             c.a,
             c.model.name(),
-            c.base.name(),
+            c.base.name(c.model),
             walls,
             c.pic.map_or("0.001 per step".into(), Pic::name),
             c.resolution,
