@@ -36,8 +36,8 @@ commands:
   verify [--quick]   run the verification cases (--quick: the CI subset, < 3 min)
   study [--quick]    measure the speed/accuracy trade and derive the presets (--quick: fewer runs)
   bench [--quick]    measure throughput and thread scaling into docs/performance.md
-                     (--quick: no 1 M-particle bodies; MPM_PEERS_DIR=DIR adds the side-by-side
-                     against Taichi from DIR/side_by_side.py)
+                     (--quick: no 1 M-particle bodies; MPM_PEERS_DIR=benches/peers adds the
+                     side-by-side against Taichi, which needs `pip install taichi`)
   runout [--quick]   column collapses against the experiments, model by model, into
                      docs/runout.md (RUNOUT_ONLY=TEXT: only the cases whose label has TEXT)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
