@@ -115,8 +115,8 @@ pub enum GridError {
     /// a length that must be positive and finite is not.
     #[error("{what} = {value} must be positive and finite")]
     NonPositiveSize {
-        /// which length ("cell width", "row height", "cell size dx", …).
-        what: &'static str,
+        /// which length.
+        what: Extent,
         /// the value given.
         value: f64,
     },
@@ -137,8 +137,8 @@ pub enum GridError {
     /// a grid needs at least one cell along each axis and at most [`MAX_CELLS_PER_AXIS`](crate::MAX_CELLS_PER_AXIS).
     #[error("{what} = {count} is out of range (1 ..= {max})")]
     CellCountOutOfRange {
-        /// which count ("rows", "columns", "cells along x", …).
-        what: &'static str,
+        /// which count.
+        what: Extent,
         /// the count asked for (as f64, because it may come from a ratio of lengths).
         count: f64,
         /// the largest count allowed.
@@ -228,6 +228,64 @@ impl LocateError {
         return Self::BelowGround { x: p.x, y: p.y, ground_y };
         #[cfg(feature = "dim3")]
         return Self::BelowGround { x: p.x, y: p.y, z: p.z, ground_y };
+    }
+}
+
+/// Which length or count of a grid a [`GridError`] names: a front end maps it to the field that
+/// set it by its variant (the text is for messages).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Extent {
+    /// a terrain grid's column width.
+    CellWidth,
+    /// a terrain grid's row height.
+    RowHeight,
+    /// a terrain grid's height over its deepest ground point, row height × rows.
+    GridHeight,
+    /// a terrain grid's rows.
+    Rows,
+    /// a terrain grid's columns, from its profile's extent over the column width.
+    Columns,
+    /// a skewed cell's width x2 − x1.
+    SkewedCellWidth,
+    /// a regular grid's cell size along an axis (0 x, 1 y, 2 z).
+    CellSize(usize),
+    /// a regular grid's cells along an axis.
+    Cells(usize),
+    /// particles per cell along an axis (uGIMP's particle size).
+    ParticlesPerCell(usize),
+    /// a 3D terrain grid's plan cell size along x (0) or z (1).
+    PlanCellSize(usize),
+    /// a 3D terrain grid's plan cells along x (0) or z (1).
+    PlanCells(usize),
+    /// a 3D terrain grid's layer height.
+    LayerHeight,
+    /// a 3D terrain grid's layers.
+    Layers,
+    /// a 3D terrain cell's height normal to the ground.
+    NormalHeight,
+}
+
+impl std::fmt::Display for Extent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        const PLAN: [&str; 2] = ["x", "z"];
+        let axis = |a: usize, names: &[&'static str]| names.get(a).copied().unwrap_or("?");
+        match *self {
+            Extent::CellWidth => f.write_str("cell width"),
+            Extent::RowHeight => f.write_str("row height"),
+            Extent::GridHeight => f.write_str("row height × rows"),
+            Extent::Rows => f.write_str("rows"),
+            Extent::Columns => f.write_str("columns"),
+            Extent::SkewedCellWidth => f.write_str("cell width x2 - x1"),
+            Extent::CellSize(a) => write!(f, "cell size d{}", axis(a, &AXES)),
+            Extent::Cells(a) => write!(f, "cells along {}", axis(a, &AXES)),
+            Extent::ParticlesPerCell(a) => write!(f, "particles per cell along {}", axis(a, &AXES)),
+            Extent::PlanCellSize(a) => write!(f, "plan cell size h{}", axis(a, &PLAN)),
+            Extent::PlanCells(a) => write!(f, "plan cells along {}", axis(a, &PLAN)),
+            Extent::LayerHeight => f.write_str("layer height"),
+            Extent::Layers => f.write_str("layers"),
+            Extent::NormalHeight => f.write_str("cell height normal to the ground"),
+        }
     }
 }
 

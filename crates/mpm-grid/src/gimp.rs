@@ -62,15 +62,10 @@ impl Gimp {
         grid: RegularGrid,
         ppc: [usize; DIM],
     ) -> Result<Self, GridError> {
-        const NAMES: [&str; 3] = [
-            "particles per cell along x",
-            "particles per cell along y",
-            "particles per cell along z",
-        ];
-        for (what, n) in NAMES.into_iter().zip(ppc) {
+        for (a, n) in ppc.into_iter().enumerate() {
             if n == 0 || n > crate::MAX_CELLS_PER_AXIS {
                 return Err(GridError::CellCountOutOfRange {
-                    what,
+                    what: crate::Extent::ParticlesPerCell(a),
                     count: n as f64,
                     max: crate::MAX_CELLS_PER_AXIS,
                 });

@@ -74,7 +74,7 @@ pub use bilinear::Bilinear;
 pub use bilinear::TerrainFactors;
 pub use bspline::QuadraticBSpline;
 pub use dispatch::{RegularShape, ShapeJob, with_regular_shape};
-pub use error::{GridError, LocateError};
+pub use error::{Extent, GridError, LocateError};
 pub use gimp::{AxisFactors, Gimp, WIDE};
 pub use math::{DIM, Matrix, Real, Vector};
 pub use node::{BoundaryNormals, CellCoords, NodeId};

@@ -14,7 +14,7 @@
 //! - points up to [`LOCATE_SLACK`] cells beyond an edge belong to the edge cell.
 //! - units SI (m).
 
-use crate::error::{GridError, LocateError};
+use crate::error::{Extent, GridError, LocateError};
 use crate::math::{DIM, Vector};
 use crate::node::{BoundaryNormals, CellCoords, NodeId};
 use crate::{LOCATE_SLACK, MAX_CELLS_PER_AXIS};
@@ -37,18 +37,16 @@ impl RegularGrid {
         if !origin.is_finite() {
             return Err(GridError::non_finite_point("grid origin", origin));
         }
-        const SIZE_NAMES: [&str; 3] = ["cell size dx", "cell size dy", "cell size dz"];
-        const COUNT_NAMES: [&str; 3] = ["cells along x", "cells along y", "cells along z"];
         for a in 0..DIM {
             let value = cell[a];
             if !(value > 0.0 && value.is_finite()) {
-                return Err(GridError::NonPositiveSize { what: SIZE_NAMES[a], value });
+                return Err(GridError::NonPositiveSize { what: Extent::CellSize(a), value });
             }
         }
         for (a, &count) in cells.iter().enumerate() {
             if count == 0 || count > MAX_CELLS_PER_AXIS {
                 return Err(GridError::CellCountOutOfRange {
-                    what: COUNT_NAMES[a],
+                    what: Extent::Cells(a),
                     count: count as f64,
                     max: MAX_CELLS_PER_AXIS,
                 });
@@ -262,8 +260,8 @@ mod tests {
     #[test]
     fn bad_sizes_are_named() {
         let err = RegularGrid::new(Vector::ZERO, Vector::new(0.1, 0.0), [1, 1]).unwrap_err();
-        assert_eq!(err, GridError::NonPositiveSize { what: "cell size dy", value: 0.0 });
+        assert_eq!(err, GridError::NonPositiveSize { what: Extent::CellSize(1), value: 0.0 });
         let err = RegularGrid::new(Vector::ZERO, Vector::ONE, [3, 0]).unwrap_err();
-        assert!(matches!(err, GridError::CellCountOutOfRange { what: "cells along y", .. }));
+        assert!(matches!(err, GridError::CellCountOutOfRange { what: Extent::Cells(1), .. }));
     }
 }

@@ -24,7 +24,7 @@
 //! in ξ, so det J > 0 on the whole cell exactly when both sides have positive height
 //! (y3 > y1 and y4 > y2): that is the non-degeneracy condition [`SkewedCell::new`] checks.
 
-use crate::error::GridError;
+use crate::error::{Extent, GridError};
 use crate::math::{Matrix, Vector};
 
 /// One skewed rectangle with vertical sides (a trapezoid whose bottom and top edges are straight),
@@ -59,7 +59,7 @@ impl SkewedCell {
         }
         let width = x2 - x1;
         if !(width > 0.0 && width.is_finite()) {
-            return Err(GridError::NonPositiveSize { what: "cell width x2 - x1", value: width });
+            return Err(GridError::NonPositiveSize { what: Extent::SkewedCellWidth, value: width });
         }
         let left_height = y[2] - y[0];
         let right_height = y[3] - y[1];

@@ -49,7 +49,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{GridError, LocateError};
+use crate::error::{Extent, GridError, LocateError};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, CellCoords, NodeId};
 use crate::skewed_cell::SkewedCell;
@@ -201,14 +201,14 @@ impl TerrainGrid {
         }
         let positive = |v: f64| v > 0.0 && v.is_finite();
         if !positive(l) {
-            return Err(GridError::NonPositiveSize { what: "cell width", value: l });
+            return Err(GridError::NonPositiveSize { what: Extent::CellWidth, value: l });
         }
         if !positive(h) {
-            return Err(GridError::NonPositiveSize { what: "row height", value: h });
+            return Err(GridError::NonPositiveSize { what: Extent::RowHeight, value: h });
         }
         if rows == 0 || rows > MAX_CELLS_PER_AXIS {
             return Err(GridError::CellCountOutOfRange {
-                what: "rows",
+                what: Extent::Rows,
                 count: rows as f64,
                 max: MAX_CELLS_PER_AXIS,
             });
@@ -223,7 +223,7 @@ impl TerrainGrid {
             let c = u.round();
             if !(0.0..=MAX_CELLS_PER_AXIS as f64).contains(&c) {
                 return Err(GridError::CellCountOutOfRange {
-                    what: "columns",
+                    what: Extent::Columns,
                     count: c,
                     max: MAX_CELLS_PER_AXIS,
                 });
@@ -247,7 +247,7 @@ impl TerrainGrid {
         let y_extent = points.iter().map(|p| p.y.abs()).fold(0.0, f64::max);
         let top = y_extent + h * rows as f64;
         if !top.is_finite() {
-            return Err(GridError::NonPositiveSize { what: "row height × rows", value: top });
+            return Err(GridError::NonPositiveSize { what: Extent::GridHeight, value: top });
         }
         let mut rise = Vec::with_capacity(points.len() - 1);
         let mut normals = Vec::with_capacity(points.len() - 1);

@@ -38,7 +38,7 @@
 //! Sides: x = x0 and x = x0 + nx·hx (normals ±x), z = z0 and z = z0 + nz·hz (±z); the top is
 //! open.
 
-use crate::error::{GridError, LocateError};
+use crate::error::{Extent, GridError, LocateError};
 use crate::math::Vector;
 use crate::node::{BoundaryNormals, CellCoords, NodeId};
 use crate::{LOCATE_SLACK, MAX_CELLS_PER_AXIS};
@@ -107,16 +107,16 @@ impl TerrainGrid {
             return Err(GridError::non_finite_point("terrain grid origin", origin3));
         }
         for (what, value) in [
-            ("plan cell size hx", spacing[0]),
-            ("plan cell size hz", spacing[1]),
-            ("layer height", r),
+            (Extent::PlanCellSize(0), spacing[0]),
+            (Extent::PlanCellSize(1), spacing[1]),
+            (Extent::LayerHeight, r),
         ] {
             if !(value > 0.0 && value.is_finite()) {
                 return Err(GridError::NonPositiveSize { what, value });
             }
         }
         for (what, count) in
-            [("plan cells along x", cells[0]), ("plan cells along z", cells[1]), ("layers", layers)]
+            [(Extent::PlanCells(0), cells[0]), (Extent::PlanCells(1), cells[1]), (Extent::Layers, layers)]
         {
             if count == 0 || count > MAX_CELLS_PER_AXIS {
                 return Err(GridError::CellCountOutOfRange {
@@ -175,7 +175,7 @@ impl TerrainGrid {
         let normal_height = r / (1.0 + steepest).sqrt();
         if !(normal_height > 0.0 && normal_height.is_finite()) {
             return Err(GridError::NonPositiveSize {
-                what: "cell height normal to the ground",
+                what: Extent::NormalHeight,
                 value: normal_height,
             });
         }

@@ -1,7 +1,7 @@
 //! `[grid]`: the terrain-following grid (eqs 19–20) or a regular one, and the shape functions
 //! it can take.
 
-use mpm_grid::{GridError, KinkPolicy, RegularGrid, TerrainGrid, TerrainGridSpec};
+use mpm_grid::{Extent, GridError, KinkPolicy, RegularGrid, TerrainGrid, TerrainGridSpec};
 use mpm_solver::Vector;
 
 use super::{Ctx, num, pair};
@@ -215,10 +215,10 @@ pub(super) fn grid_error(ctx: &Ctx<'_>, e: GridError, profile: &[[f64; 2]]) -> S
         ),
         GridError::NonPositiveSize { what, value } => {
             let path = match what {
-                "cell width" => "grid.cell_width",
-                "row height" => "grid.row_height",
-                "cell size dx" => "grid.cell[0]",
-                "cell size dy" => "grid.cell[1]",
+                Extent::CellWidth => "grid.cell_width",
+                Extent::RowHeight => "grid.row_height",
+                Extent::CellSize(0) => "grid.cell[0]",
+                Extent::CellSize(1) => "grid.cell[1]",
                 _ => "grid",
             };
             ctx.range(path, value, "0 < size < ∞ (m)", "give the cell size in metres, e.g. 0.1")
@@ -232,9 +232,9 @@ pub(super) fn grid_error(ctx: &Ctx<'_>, e: GridError, profile: &[[f64; 2]]) -> S
         ),
         GridError::CellCountOutOfRange { what, count, max } => {
             let path = match what {
-                "rows" => "grid.rows",
-                "cells along x" => "grid.cells[0]",
-                "cells along y" => "grid.cells[1]",
+                Extent::Rows => "grid.rows",
+                Extent::Cells(0) => "grid.cells[0]",
+                Extent::Cells(1) => "grid.cells[1]",
                 _ => "grid.profile",
             };
             ctx.err(
