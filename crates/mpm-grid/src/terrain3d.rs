@@ -115,9 +115,11 @@ impl TerrainGrid {
                 return Err(GridError::NonPositiveSize { what, value });
             }
         }
-        for (what, count) in
-            [(Extent::PlanCells(0), cells[0]), (Extent::PlanCells(1), cells[1]), (Extent::Layers, layers)]
-        {
+        for (what, count) in [
+            (Extent::PlanCells(0), cells[0]),
+            (Extent::PlanCells(1), cells[1]),
+            (Extent::Layers, layers),
+        ] {
             if count == 0 || count > MAX_CELLS_PER_AXIS {
                 return Err(GridError::CellCountOutOfRange {
                     what,

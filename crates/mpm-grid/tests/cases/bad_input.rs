@@ -1,8 +1,8 @@
 //! Every kind of bad input is a typed error naming the offending point or value; nothing panics.
 
 use mpm_grid::{
-    Bilinear, Gimp, GridError, KinkPolicy, LocateError, RegularGrid, ShapeFunctions, SkewedCell,
-    TerrainGrid, TerrainGridSpec, Vector,
+    Bilinear, Extent, Gimp, GridError, KinkPolicy, LocateError, RegularGrid, ShapeFunctions,
+    SkewedCell, TerrainGrid, TerrainGridSpec, Vector,
 };
 
 fn spec(profile: Vec<Vector>) -> TerrainGridSpec {
@@ -56,24 +56,24 @@ fn cell_sizes_that_are_not_positive() {
         s.cell_width = bad;
         assert!(matches!(
             TerrainGrid::new(s).unwrap_err(),
-            GridError::NonPositiveSize { what: "cell width", .. }
+            GridError::NonPositiveSize { what: Extent::CellWidth, .. }
         ));
         let mut s = spec(vec![v(0.0, 1.0), v(1.0, 0.0)]);
         s.row_height = bad;
         assert!(matches!(
             TerrainGrid::new(s).unwrap_err(),
-            GridError::NonPositiveSize { what: "row height", .. }
+            GridError::NonPositiveSize { what: Extent::RowHeight, .. }
         ));
         assert!(matches!(
             RegularGrid::new(Vector::ZERO, v(bad, 0.1), [2, 2]).unwrap_err(),
-            GridError::NonPositiveSize { what: "cell size dx", .. }
+            GridError::NonPositiveSize { what: Extent::CellSize(0), .. }
         ));
     }
     let mut s = spec(vec![v(0.0, 1.0), v(1.0, 0.0)]);
     s.rows = 0;
     assert!(matches!(
         TerrainGrid::new(s).unwrap_err(),
-        GridError::CellCountOutOfRange { what: "rows", .. }
+        GridError::CellCountOutOfRange { what: Extent::Rows, .. }
     ));
     assert!(matches!(
         RegularGrid::new(v(f64::NAN, 0.0), v(0.1, 0.1), [2, 2]).unwrap_err(),
@@ -114,9 +114,9 @@ fn absurd_extents_are_errors_not_overflows() {
         kink_policy: KinkPolicy::Snap,
     })
     .unwrap_err();
-    assert!(matches!(err, GridError::CellCountOutOfRange { what: "columns", .. }));
+    assert!(matches!(err, GridError::CellCountOutOfRange { what: Extent::Columns, .. }));
     let err = RegularGrid::new(Vector::ZERO, v(0.1, 0.1), [usize::MAX, 1]).unwrap_err();
-    assert!(matches!(err, GridError::CellCountOutOfRange { what: "cells along x", .. }));
+    assert!(matches!(err, GridError::CellCountOutOfRange { what: Extent::Cells(0), .. }));
 }
 
 #[test]
