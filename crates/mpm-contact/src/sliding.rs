@@ -65,7 +65,7 @@ impl RigidSlide {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -191,9 +191,16 @@ impl EnergyCheck {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
+
+    /// the point (x, y) of the plane, or of the x–y plane in space.
+    fn at(x: Real, y: Real) -> Vector {
+        let mut p = Vector::ZERO;
+        (p.x, p.y) = (x, y);
+        p
+    }
 
     fn ledger(kinetic: Real, potential: Real, residual: Real) -> EnergyLedger {
         EnergyLedger { kinetic, potential, residual, ..Default::default() }
@@ -203,7 +210,7 @@ mod tests {
     fn the_scale_grows_with_the_released_potential_and_keeps_the_worst_residual() {
         // A body of m g h = 100 J/m above the ground, at rest: 1 kg at 10 m under g = 10 m/s²
         // (ground at y = 2), and a particle below the ground, which adds nothing.
-        let position = [Vector::new(3.0, 12.0), Vector::new(0.0, -1.0)];
+        let position = [at(3.0, 12.0), at(0.0, -1.0)];
         let ground = |_x: Vector| 2.0;
         let mut c =
             EnergyCheck::new(&ledger(0.0, 500.0, 0.0), &position, &[1.0, 5.0], 10.0, ground);

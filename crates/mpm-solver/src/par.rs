@@ -129,7 +129,7 @@ pub(crate) fn reduce_chunks<T: Send + Copy + Sync>(
     (0..chunks).into_par_iter().map(f).reduce(|| identity, merge)
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
 
