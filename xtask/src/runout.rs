@@ -65,6 +65,9 @@ pub enum Model {
     /// the μ(I) rheology with the glass beads of Jop, Forterre & Pouliquen (2006) — not the
     /// sand: a rate-dependent friction set against the constant one.
     MuI,
+    /// the same beads without the rate dependence (μ_2 = μ_s): the same cone, so that the
+    /// difference from [`Model::MuI`] is the rate dependence alone.
+    MuIStatic,
 }
 
 impl Model {
@@ -75,22 +78,24 @@ impl Model {
             Model::DpOuter => "DP outer cone",
             Model::DpInner => "DP inner cone",
             Model::MuI => "μ(I) glass beads",
+            Model::MuIStatic => "μ(I) glass beads, μ_2 = μ_s",
         }
     }
 
     /// how much farther than the sand's grid this model's grid reaches in `dim`: the beads run
-    /// up to 90 % beyond the experiments in plane strain.
+    /// up to 92 % beyond the experiments in plane strain (the glued a = 8 column's front came
+    /// within two cells of the grid's end; no grain reached it).
     fn reach(self, dim: u8) -> f64 {
         match (self, dim) {
-            (Model::MuI, 2) => 1.2,
-            (Model::MuI, _) => 1.3,
+            (Model::MuI | Model::MuIStatic, 2) => 1.2,
+            (Model::MuI | Model::MuIStatic, _) => 1.3,
             _ => 1.0,
         }
     }
 
     /// the static friction angle (°): the sand's, or the beads' μ_s = tan 20.9°.
     fn static_angle(self) -> f64 {
-        if self == Model::MuI { MU_I_STATIC_DEG } else { PHI }
+        if matches!(self, Model::MuI | Model::MuIStatic) { MU_I_STATIC_DEG } else { PHI }
     }
 
     fn toml(self) -> String {
@@ -106,6 +111,7 @@ impl Model {
             Model::DpOuter => "kind = \"drucker_prager\"\ncone_match = \"outer\"\n".into(),
             Model::DpInner => "kind = \"drucker_prager\"\ncone_match = \"inner\"\n".into(),
             Model::MuI => return MU_I_BEADS.into(),
+            Model::MuIStatic => return MU_I_BEADS.replace("mu_2 = 0.6435", "mu_2 = 0.3819"),
         };
         format!("{kind}{common}")
     }
@@ -239,7 +245,8 @@ fn experiment_height_of(channel: bool, a: f64) -> f64 {
 }
 
 /// A quasi-2D column's section on its grid: L0, Δx, H0, cells along and up, and the end time
-/// (room for 1.6 × the experiments' runout, 1.3 H0 above; a dozen free-fall times).
+/// (room for 1.6 × the experiments' runout times the model's reach, 1.3 H0 above; a dozen
+/// free-fall times).
 struct Section {
     l0: f64,
     dx: f64,
@@ -467,6 +474,7 @@ pub fn cases(quick: bool) -> Vec<Case> {
     out.push(case(2, 8.0, Model::MohrCoulomb, Base::Glued, 20, None));
     for &a in &[0.5, 1.0, 2.0, 4.0, 8.0] {
         out.push(case(2, a, Model::MuI, Base::Rough, 20, None));
+        out.push(case(2, a, Model::MuIStatic, Base::Rough, 20, None));
         out.push(case(2, a, Model::MuI, Base::Glued, 20, None));
         out.push(case(2, a, Model::MuI, Base::Glued, 20, Some(25.0)));
     }
@@ -693,4 +701,18 @@ fn table(rows: &[Row]) -> String {
         s.push_str(&rich);
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Model;
+
+    /// the beads without the rate dependence differ from the beads in μ_2 alone, set to μ_s.
+    #[test]
+    fn static_beads_are_the_beads_with_mu_2_at_mu_s() {
+        let (rate, flat) = (Model::MuI.toml(), Model::MuIStatic.toml());
+        assert!(rate.contains("mu_2 = 0.6435") && rate.contains("mu_s = 0.3819"), "{rate}");
+        assert_eq!(flat, rate.replace("mu_2 = 0.6435", "mu_2 = 0.3819"));
+        assert_ne!(flat, rate);
+    }
 }
