@@ -34,30 +34,13 @@ use mpm_scene::summary::{
     self, DtStats, EnergyReport, OutflowReport, RunStatus, RunSummary, RunoutMetrics, RunoutReport,
 };
 use mpm_scene::{SavedState, SpaceGrid, SpaceScene, dispatch_space, fnv1a};
-use mpm_solver3d::{EnergyCheck, EnergyLedger, Observer, RunEnd, Solver, StepReport, Vector};
+use mpm_solver3d::{EnergyCheck, Observer, RunEnd, Solver, StepReport, Vector};
 
 use crate::common::{CheckReport, setup_error, with_pool};
 use crate::driver::{next_mark, on_mark, slot};
 use crate::error::RunError;
 use crate::options::RunOptions;
 use crate::progress::ProgressSink;
-
-/// the 3D ledger as the summary's (the same fields; J, not J/m).
-pub(crate) fn ledger(l: &EnergyLedger) -> mpm_solver::EnergyLedger {
-    mpm_solver::EnergyLedger {
-        kinetic: l.kinetic,
-        strain: l.strain,
-        potential: l.potential,
-        plastic_dissipation: l.plastic_dissipation,
-        friction_work: l.friction_work,
-        constraint_work: l.constraint_work,
-        transfer_dissipation: l.transfer_dissipation,
-        side_wall_friction: l.side_wall_friction,
-        external_work: l.external_work,
-        outflow: l.outflow,
-        residual: l.residual,
-    }
-}
 
 /// The main mass of a 3D run in plan: the particles (indices into `positions`) of the heaviest
 /// set of plan cells of side `column` (in x and z) joined by an edge or a corner; the first such
@@ -649,7 +632,7 @@ impl<'a> SpaceDriver<'a> {
             time: t,
             step: solver.step_count(),
             dt: solver.last_report().dt,
-            ledger: ledger(&l),
+            ledger: l,
         });
         let m = self.metrics(solver);
         self.runout.push(m);
@@ -808,7 +791,7 @@ impl<'a> SpaceDriver<'a> {
             particle_steps_per_s: if wall > 0.0 { particle_steps / wall } else { 0.0 },
             output_time_s: self.output_time,
             threads,
-            energy: ledger(&solver.energy()),
+            energy: solver.energy(),
             energy_check: EnergyReport {
                 relative_residual: check.observe(t, &solver.energy()),
                 worst_relative_residual: check.worst,

@@ -15,61 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::math::{Real, Vector};
 
-/// Energies of one instant (J per metre of thickness).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct EnergyLedger {
-    /// Σ ½ m_p |v_p|².
-    pub kinetic: Real,
-    /// Σ V_p ½ σ_p : C⁻¹ : σ_p (recoverable elastic energy).
-    pub strain: Real,
-    /// Σ −m_p g·x_p.
-    pub potential: Real,
-    /// Plastic dissipation accumulated since the start.
-    pub plastic_dissipation: Real,
-    /// Work done against boundary friction since the start.
-    pub friction_work: Real,
-    /// Kinetic energy removed by normal boundary constraints since the start.
-    pub constraint_work: Real,
-    /// Kinetic energy removed by the PIC share of the velocity transfer since the start
-    /// ([`crate::SolverConfig::pic_fraction`]; 0 under pure FLIP).
-    #[serde(default)]
-    pub transfer_dissipation: Real,
-    /// Work done against the friction of side walls across the plane since the start
-    /// ([`crate::SideWalls`]; 0 without them).
-    #[serde(default)]
-    pub side_wall_friction: Real,
-    /// Work of non-conservative external loads since the start.
-    pub external_work: Real,
-    /// Energy (kinetic, elastic and potential, as the stored terms count them) carried out of
-    /// the run by particles that left through outflow faces since the start
-    /// ([`crate::Outflow`]; 0 without them). Neither stored nor dissipated: it left.
-    #[serde(default)]
-    pub outflow: Real,
-    /// (stored + dissipated + outflow) − (initial stored + external work).
-    pub residual: Real,
-}
-
-impl EnergyLedger {
-    /// kinetic + strain + potential.
-    pub fn stored(&self) -> Real {
-        self.kinetic + self.strain + self.potential
-    }
-
-    /// plastic + friction + constraint work + transfer dissipation + side-wall friction.
-    pub fn dissipated(&self) -> Real {
-        self.plastic_dissipation
-            + self.friction_work
-            + self.constraint_work
-            + self.transfer_dissipation
-            + self.side_wall_friction
-    }
-
-    /// stored + dissipated + what left through outflow faces: constant for a perfect integrator
-    /// without external work.
-    pub fn total(&self) -> Real {
-        self.stored() + self.dissipated() + self.outflow
-    }
-}
+pub use mpm_core::EnergyLedger;
 
 /// Energy dissipated so far, carried by the solver between steps (and in checkpoints).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

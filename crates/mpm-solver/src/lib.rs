@@ -69,9 +69,9 @@ pub mod solver;
 mod stages;
 
 pub use config::{
-    Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT, MassMatrix,
-    Outflow, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig, TimeStep,
-    Transfer,
+    BadTimeStep, Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT,
+    MassMatrix, Outflow, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme, SideWalls, SolverConfig,
+    TimeStep, Transfer,
 };
 pub use energy::{Dissipation, EnergyCheck, EnergyLedger, Outflowed};
 pub use error::{Field, SolverError};

@@ -5,66 +5,9 @@
 
 use mpm_constitutive::ConstitutiveModel;
 
-use crate::config::{MAX_COURANT, TimeStep};
 use crate::math::Real;
 
-/// The largest Δt for which a particle at speed `v` under gravity `g` moves at most `d`:
-/// the root of v Δt + ½ g Δt² = d (+∞ when nothing moves). The time step's second bound
-/// (module docs), exported so that a front end can predict the first Δt.
-pub fn displacement_dt(d: Real, v: Real, g: Real) -> Real {
-    // 2d / (v + √(v² + 2gd)): the rationalised root, exact also for g = 0 (d/v).
-    2.0 * d / (v + (v * v + 2.0 * g * d).sqrt())
-}
-
-/// Why a fixed Δt cannot run (a Courant Δt always can).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum StepLimit {
-    /// the fixed Δt gives the fastest signal a Courant number above 1 (eq 13).
-    Courant {
-        /// Δt·s/L.
-        courant: Real,
-        /// the fixed Δt (s).
-        dt: Real,
-    },
-    /// gravity and the fastest speed carry a particle more than one cell in the fixed Δt.
-    Displacement {
-        /// (|v|_max Δt + ½ |g| Δt²) / L.
-        cells: Real,
-        /// the fixed Δt (s).
-        dt: Real,
-    },
-}
-
-/// The Δt of a step (eq 13 and the displacement bound, module docs) from the fastest signal
-/// `signal` = max_p s_p (m/s) and the fastest speed `v_max` (m/s), with `cell` the smallest cell
-/// size L (m) and `gravity` = |g| (m/s²): C·L/s bounded by [`displacement_dt`] for a Courant
-/// number C, or the fixed Δt after checking it. The solver calls it before every step and a
-/// front end for the first one, so both apply one rule (a front end computing c = √(M/ρ) from
-/// the initial density may differ from the solver's M·V/m in the last bit).
-pub fn stable_dt(
-    time_step: TimeStep,
-    cell: Real,
-    gravity: Real,
-    signal: Real,
-    v_max: Real,
-) -> Result<Real, StepLimit> {
-    match time_step {
-        TimeStep::Courant(c) => {
-            Ok((c * cell / signal).min(displacement_dt(c * cell, v_max, gravity)))
-        }
-        TimeStep::Fixed(dt) => {
-            let courant = dt * signal / cell;
-            if courant > MAX_COURANT {
-                return Err(StepLimit::Courant { courant, dt });
-            }
-            let cells = (v_max * dt + 0.5 * gravity * dt * dt) / cell;
-            if cells > MAX_COURANT {
-                return Err(StepLimit::Displacement { cells, dt });
-            }
-            Ok(dt)
-        }
-    }
-}
+pub use mpm_core::timestep::{StepLimit, displacement_dt, stable_dt};
 
 /// What the time step needs from the particles: the fastest signal max_p s_p and the fastest
 /// speed max_p |v_p|, each with its particle.

@@ -14,7 +14,7 @@ use super::{Advance, Command, Limit, Reply, SpaceFields, Worker, argument, write
 use crate::common::setup_error;
 use crate::error::RunError;
 use crate::options::RunOptions;
-use crate::space::{SpaceDriver, Stop, describe, ledger};
+use crate::space::{SpaceDriver, Stop, describe};
 
 /// The 3D side of [`crate::Simulation`]: builds the 3D solver with the scene's types and serves
 /// the commands the 2D worker serves (`simulation.rs`), recording as a run without an output
@@ -144,7 +144,7 @@ impl SpaceJob for SpaceWorker {
                             .collect(),
                     }))
                 }
-                Command::Energy => Reply::Energy(ledger(&solver.energy())),
+                Command::Energy => Reply::Energy(solver.energy()),
                 Command::Summary => {
                     let status = if mpm_solver3d::reached(solver.time(), current.end_time) {
                         RunStatus::Completed

@@ -327,7 +327,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
             "remove `dimension` for a 2D scene, or write `dimension = 3`",
         ));
     }
-    let settings = solver::settings(ctx, &f.solver)?;
+    let settings = solver::settings(ctx, &f.solver, 2)?;
     let (grid, ground, cell_x) = grid::build(ctx, &f.grid)?;
     let shape_function = grid::shape_function(ctx, &f.solver, settings.preset, &grid)?;
     let built = materials::build(ctx, &f.materials)?;

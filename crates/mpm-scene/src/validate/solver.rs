@@ -2,8 +2,8 @@
 
 use mpm_contact::Wall;
 use mpm_solver::{
-    Boundaries, Periodic, PicWeighting, Scheme, SolverConfig, SolverError, StepLimit, TimeStep,
-    Vector, stable_dt,
+    BadTimeStep, Boundaries, Periodic, PicWeighting, Scheme, SolverConfig, SolverError, StepLimit,
+    TimeStep, Vector, stable_dt,
 };
 use mpm_solver::{DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT};
 
@@ -21,7 +21,8 @@ pub(super) struct Settings {
     pub preset: Option<PresetSettings>,
     pub scheme: Scheme,
     pub time_step: TimeStep,
-    pub gravity: Vector,
+    /// (gx, gy, gz) in m/s²; gz is 0 in a 2D scene.
+    pub gravity: [f64; 3],
     pub gravity_ramp: f64,
     pub small_mass_ratio: f64,
     pub alarm: EnergyAlarm,
@@ -29,8 +30,9 @@ pub(super) struct Settings {
     pub stop_at_rest: Option<StopAtRest>,
 }
 
-/// Checks `[solver]` except what needs the grid, materials and bodies (the first Δt).
-pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneError> {
+/// Checks `[solver]` except what needs the grid, materials and bodies (the first Δt), for a
+/// scene of `dim` dimensions (2 or 3: gravity's components).
+pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec, dim: usize) -> Result<Settings, SceneError> {
     if !(finite_pos(s.end_time) && s.end_time <= 1e7) {
         return Err(ctx.range(
             "solver.end_time",
@@ -51,57 +53,28 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
                 "remove `dt` (recommended) or `courant`",
             ));
         }
-        (Some(c), None) => {
-            if !(c > 0.0 && c <= MAX_COURANT) {
-                return Err(ctx.range(
-                    "solver.courant",
-                    c,
-                    &format!("0 < courant ≤ {MAX_COURANT} (explicit stability, eq 13)"),
-                    &format!(
-                        "use the paper's advice `courant = {DEFAULT_COURANT}`; above \
-                         {MAX_COURANT} the explicit step is unstable"
-                    ),
-                ));
-            }
-            TimeStep::Courant(c)
-        }
-        (None, Some(dt)) => {
-            if !finite_pos(dt) {
-                return Err(ctx.range(
-                    "solver.dt",
-                    dt,
-                    &format!("0 < dt < ∞ (s), with a Courant number ≤ {MAX_COURANT}"),
-                    &format!(
-                        "give a positive time step, or use `courant = {DEFAULT_COURANT}` instead"
-                    ),
-                ));
-            }
-            TimeStep::Fixed(dt)
-        }
+        (Some(c), None) => TimeStep::Courant(c),
+        (None, Some(dt)) => TimeStep::Fixed(dt),
         (None, None) => TimeStep::Courant(preset.map_or(DEFAULT_COURANT, |p| p.courant)),
     };
-    let gravity = match s.gravity.as_deref() {
-        None => [0.0, -mpm_solver::STANDARD_GRAVITY],
-        Some(&[gx, gy]) => [gx, gy],
-        Some(g) => {
-            return Err(ctx.err(
-                "solver.gravity",
-                Some(format!("{g:?}")),
-                format!("{} components in a 2D scene", g.len()),
-                "[gx, gy] (m/s²) in 2D; [gx, gy, gz] with `dimension = 3` in [grid]",
-                "give two components, or add `dimension = 3` to [grid] for a 3D scene",
-            ));
-        }
-    };
-    if !(gravity[0].is_finite() && gravity[1].is_finite()) {
-        return Err(ctx.err(
-            "solver.gravity",
-            Some(pair(gravity)),
-            "gravity is not finite",
-            "finite components (m/s²)",
-            "use `gravity = [0.0, -9.81]`",
-        ));
-    }
+    let time_step = time_step.checked().map_err(|bad| match bad {
+        BadTimeStep::Courant(c) => ctx.range(
+            "solver.courant",
+            c,
+            &format!("0 < courant ≤ {MAX_COURANT} (explicit stability, eq 13)"),
+            &format!(
+                "use the paper's advice `courant = {DEFAULT_COURANT}`; above {MAX_COURANT} the \
+                 explicit step is unstable"
+            ),
+        ),
+        BadTimeStep::Dt(dt) => ctx.range(
+            "solver.dt",
+            dt,
+            &format!("0 < dt < ∞ (s), with a Courant number ≤ {MAX_COURANT}"),
+            &format!("give a positive time step, or use `courant = {DEFAULT_COURANT}` instead"),
+        ),
+    })?;
+    let gravity = gravity(ctx, s, dim)?;
     let gravity_ramp = s.gravity_ramp.unwrap_or(0.0);
     if !(gravity_ramp.is_finite() && gravity_ramp >= 0.0) {
         return Err(ctx.range(
@@ -173,13 +146,50 @@ pub(super) fn settings(ctx: &Ctx<'_>, s: &SolverSpec) -> Result<Settings, SceneE
         preset,
         scheme,
         time_step,
-        gravity: Vector::new(gravity[0], gravity[1]),
+        gravity,
         gravity_ramp,
         small_mass_ratio,
         alarm,
         max_steps,
         stop_at_rest,
     })
+}
+
+/// `solver.gravity` of a scene of `dim` dimensions: `dim` finite components, (0, −g, 0) by
+/// default.
+fn gravity(ctx: &Ctx<'_>, s: &SolverSpec, dim: usize) -> Result<[f64; 3], SceneError> {
+    let space = dim == 3;
+    match s.gravity.as_deref() {
+        None => Ok([0.0, -mpm_solver::STANDARD_GRAVITY, 0.0]),
+        Some(g) if g.len() == dim && g.iter().all(|c| c.is_finite()) => {
+            Ok([g[0], g[1], if space { g[2] } else { 0.0 }])
+        }
+        Some(g) if g.len() == dim => Err(ctx.err(
+            "solver.gravity",
+            Some(if space { format!("{g:?}") } else { pair([g[0], g[1]]) }),
+            "gravity is not finite",
+            if space { "[gx, gy, gz], finite (m/s²)" } else { "finite components (m/s²)" },
+            if space {
+                "use `gravity = [0.0, -9.81, 0.0]`"
+            } else {
+                "use `gravity = [0.0, -9.81]`"
+            },
+        )),
+        Some(g) if space => Err(ctx.err(
+            "solver.gravity",
+            Some(format!("{g:?}")),
+            "a 3D scene's gravity has 3 components",
+            "[gx, gy, gz], finite (m/s²)",
+            "use `gravity = [0.0, -9.81, 0.0]`",
+        )),
+        Some(g) => Err(ctx.err(
+            "solver.gravity",
+            Some(format!("{g:?}")),
+            format!("{} components in a 2D scene", g.len()),
+            "[gx, gy] (m/s²) in 2D; [gx, gy, gz] with `dimension = 3` in [grid]",
+            "give two components, or add `dimension = 3` to [grid] for a 3D scene",
+        )),
+    }
 }
 
 /// The solver configuration of a scene; where the scene is silent, its materials' model decides
@@ -207,7 +217,7 @@ pub(super) fn config(
     let config = SolverConfig {
         scheme: settings.scheme,
         time_step: settings.time_step,
-        gravity: settings.gravity,
+        gravity: Vector::new(settings.gravity[0], settings.gravity[1]),
         boundaries,
         periodic,
         outflow,

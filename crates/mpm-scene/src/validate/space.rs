@@ -9,16 +9,13 @@ use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid, TerrainGrid, TerrainGridSpec};
 use mpm_solver3d::generate::{self, Shape};
 // the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
 // build's), converted below
-use mpm_solver3d::{
-    Boundaries, Contact, MassMatrix, Outflow, Periodic, PicWeighting, STANDARD_GRAVITY, Scheme,
-    SolverConfig, TimeStep, Transfer, Vector,
-};
+use mpm_solver3d::{Boundaries, Outflow, Periodic, SolverConfig, TimeStep, Transfer, Vector};
 
 use super::{Ctx, bodies, boundaries, finite_pos, materials, num, plausible, serde_error, solver};
 use crate::error::SceneError;
 use crate::file::{
-    Axis, BoundarySpec, GridKind, ShapeFunctionKind, SolverSpec, SpaceBodySpec, SpaceFile,
-    SpaceShapeKind, VtkField,
+    Axis, BoundarySpec, GridKind, ShapeFunctionKind, SpaceBodySpec, SpaceFile, SpaceShapeKind,
+    VtkField,
 };
 use crate::limits::{MAX_BODIES, MAX_PARTICLES, MAX_PARTICLES_PER_CELL, MAX_VERTICES};
 use crate::materials::MaterialsBuilt;
@@ -96,9 +93,8 @@ pub(super) fn load_space(
 }
 
 fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneError> {
-    let gravity = gravity(ctx, &f)?;
-    // the settings the dimensions share (gravity, 3 components here, was read above)
-    let settings = solver::settings(ctx, &SolverSpec { gravity: None, ..f.solver.clone() })?;
+    let settings = solver::settings(ctx, &f.solver, 3)?;
+    let gravity = Vector::from_array(settings.gravity);
     let (grid, surface, crs) = grid(ctx, &f)?;
     let shape_function = f
         .solver
@@ -190,27 +186,6 @@ fn runout_direction(ctx: &Ctx<'_>, f: &SpaceFile, gravity: Vector) -> Result<Vec
                     "give the way the flow runs in plan, e.g. `runout_direction = [1, 0, 0]`",
                 )
             }),
-    }
-}
-
-/// `[solver] gravity` of a 3D scene: three finite components, default (0, −g, 0).
-fn gravity(ctx: &Ctx<'_>, f: &SpaceFile) -> Result<Vector, SceneError> {
-    match f.solver.gravity.as_deref() {
-        None => Ok(Vector::NEG_Y * STANDARD_GRAVITY),
-        Some(&[gx, gy, gz]) if gx.is_finite() && gy.is_finite() && gz.is_finite() => {
-            Ok(Vector::new(gx, gy, gz))
-        }
-        Some(g) => Err(ctx.err(
-            "solver.gravity",
-            Some(format!("{g:?}")),
-            if g.len() == 3 {
-                "gravity is not finite"
-            } else {
-                "a 3D scene's gravity has 3 components"
-            },
-            "[gx, gy, gz], finite (m/s²)",
-            "use `gravity = [0.0, -9.81, 0.0]`",
-        )),
     }
 }
 
@@ -1167,23 +1142,12 @@ fn config(
         walls.push(wall);
     }
     let s = &f.solver;
-    let transfer = match s.transfer.unwrap_or_default() {
-        mpm_solver::Transfer::Flip => Transfer::Flip,
-        mpm_solver::Transfer::Apic => Transfer::Apic,
-    };
+    let transfer = s.transfer.unwrap_or_default();
     let flip = transfer == Transfer::Flip;
     let (pic_fraction, pic_relaxation, pic_weighting) = solver::pic_share(ctx, s, flip, materials)?;
     let config = SolverConfig {
-        scheme: match settings.scheme {
-            mpm_solver::Scheme::Usl => Scheme::Usl,
-            mpm_solver::Scheme::Musl => Scheme::Musl,
-            mpm_solver::Scheme::Usf => Scheme::Usf,
-            mpm_solver::Scheme::Usavg => Scheme::Usavg,
-        },
-        time_step: match settings.time_step {
-            mpm_solver::TimeStep::Courant(c) => TimeStep::Courant(c),
-            mpm_solver::TimeStep::Fixed(dt) => TimeStep::Fixed(dt),
-        },
+        scheme: settings.scheme,
+        time_step: settings.time_step,
         gravity,
         boundaries,
         periodic,
@@ -1195,23 +1159,14 @@ fn config(
         transfer,
         pic_fraction,
         pic_relaxation,
-        pic_weighting: match pic_weighting {
-            mpm_solver::PicWeighting::Uniform => PicWeighting::Uniform,
-            mpm_solver::PicWeighting::Noise => PicWeighting::Noise,
-        },
+        pic_weighting,
         separation_density: s.separation_density.unwrap_or(if flip {
             materials.separation_density()
         } else {
             0.0
         }),
-        contact: match s.contact.unwrap_or_default() {
-            mpm_solver::Contact::Surface => Contact::Surface,
-            mpm_solver::Contact::Node => Contact::Node,
-        },
-        mass: match s.mass.unwrap_or_default() {
-            mpm_solver::MassMatrix::Lumped => MassMatrix::Lumped,
-            mpm_solver::MassMatrix::Consistent => MassMatrix::Consistent,
-        },
+        contact: s.contact.unwrap_or_default(),
+        mass: s.mass.unwrap_or_default(),
     };
     config.validate().map_err(|e| {
         let (path, fix) = match &e {
