@@ -83,6 +83,7 @@ use crate::tensor::{
 
 /// How the cone is fitted to the Mohr-Coulomb pyramid of `(c, φ)` (and `ψ` for `αg`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ConeMatch {
     /// same collapse load in plane strain (the paper's choice):
     /// `α = tanφ/√(9 + 12 tan²φ)`, `k0 = 3c/√(9 + 12 tan²φ)`.
@@ -116,8 +117,12 @@ impl ConeMatch {
     }
 }
 
-/// Material parameters of [`DruckerPrager`] (SI units, angles in degrees).
+/// Material parameters of [`DruckerPrager`] (SI units, angles in degrees). As a serde table (a
+/// scene's `[materials.NAME]` with `kind = "drucker_prager"`) it refuses unknown fields, and
+/// `dilatancy_angle_deg` (0), `hardening_modulus` (0), `mixing` (1, isotropic) and `cone_match`
+/// (`"plane_strain"`, the paper's; or `"inner"`, `"outer"`) may be left out.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DruckerPragerParams {
     /// Young's modulus `E > 0` (Pa).
     pub young: f64,
@@ -128,13 +133,22 @@ pub struct DruckerPragerParams {
     /// friction angle `0 ≤ φ < 90` (degrees).
     pub friction_angle_deg: f64,
     /// dilatancy angle `0 ≤ ψ ≤ φ` (degrees); `ψ = φ` is associated flow.
+    #[serde(default)]
     pub dilatancy_angle_deg: f64,
     /// plastic modulus `H = dk/dε̄ᵖ` (Pa); negative values (softening) only while well posed.
+    #[serde(default)]
     pub hardening_modulus: f64,
     /// M ∈ \[0,1\]: 1 isotropic, 0 kinematic
+    #[serde(default = "isotropic")]
     pub mixing: f64,
     /// how `(α, k0, αg)` are matched to `(c, φ, ψ)`.
+    #[serde(default)]
     pub cone_match: ConeMatch,
+}
+
+/// [`DruckerPragerParams::mixing`]'s default: isotropic hardening.
+fn isotropic() -> f64 {
+    1.0
 }
 
 impl DruckerPragerParams {

@@ -20,7 +20,6 @@ mod elastic;
 mod mohr_coulomb;
 mod mu_i;
 
-pub use drucker_prager::{ConeMatchSpec, DruckerPragerSpec};
 pub use elastic::ElasticSpec;
 pub use mohr_coulomb::MohrCoulombSpec;
 
