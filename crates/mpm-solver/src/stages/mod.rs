@@ -1,5 +1,6 @@
 //! The stages of one step, each an `impl` block on [`crate::Solver`] in its own file.
 
+mod edges;
 mod g2p;
 pub(crate) mod grid;
 mod locate;
