@@ -20,7 +20,7 @@ use out::{out, outln};
 use clap::{Parser, Subcommand, ValueEnum};
 use mpm_run::{
     AnyScene, DEFAULT_SCENE, ElementTest, ElementTestOptions, OutputError, RunError, RunOptions,
-    RunStatus, RunSummary, SCENES, Scene, SceneError, SpaceScene,
+    RunStatus, RunSummary, SCENES, Scene, SceneError,
 };
 
 #[derive(Parser)]
@@ -330,85 +330,15 @@ fn scene_materials(
         .collect()
 }
 
-/// `mpm check` of a 3D scene.
-fn check_space(scene: &SpaceScene) -> ExitCode {
-    match mpm_run::check_space_scene(scene) {
-        Ok(r) => {
-            let c = &scene.config;
-            outln!("{}: valid (3D)", scene.origin());
-            outln!("  particles:        {}", r.particles);
-            let cells: Vec<String> = r.cells.iter().map(ToString::to_string).collect();
-            outln!(
-                "  grid:             {} cells, {} active nodes at t = 0",
-                cells.join(" × "),
-                r.active_nodes
-            );
-            outln!(
-                "  scheme:           {}, {} shape functions, {:?} transfer, time step {:?}",
-                c.scheme.name(),
-                scene.shape_function.name(),
-                c.transfer,
-                c.time_step
-            );
-            outln!("  initial Δt:       {:.4e} s", r.initial_dt);
-            outln!("  steps:            {} or more to t = {} s", r.estimated_steps, scene.end_time);
-            outln!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
-            outln!(
-                "  frames:           {} (about {:.1} MB on disk)",
-                r.frames,
-                r.frame_bytes as f64 / 1e6
-            );
-            for w in &scene.warnings {
-                outln!("  warning: {w}");
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => run_failure(&e),
-    }
-}
-
-/// `mpm check SCENE`: validates and prints what a run would do.
+/// `mpm check SCENE`: validates and prints what a run would do (2D or 3D).
 fn check(scene: &str) -> ExitCode {
     let scene = match load_any(scene) {
-        Ok(AnyScene::Plane(s)) => s,
-        Ok(AnyScene::Space(s)) => return check_space(&s),
+        Ok(s) => s,
         Err(e) => return scene_failure(&e),
     };
-    match mpm_run::check_scene(&scene) {
-        Ok(r) => {
-            let c = scene.solver_config();
-            outln!("{}: valid", scene.origin());
-            for w in &scene.resolved().warnings {
-                outln!("  warning: {w}");
-            }
-            outln!("  particles:        {}", r.particles);
-            outln!(
-                "  grid:             {} × {} cells, {} active nodes at t = 0",
-                r.cells[0],
-                r.cells[1],
-                r.active_nodes
-            );
-            outln!(
-                "  scheme:           {}, {} shape functions, time step {:?}",
-                c.scheme.name(),
-                scene.shape_function().name(),
-                c.time_step
-            );
-            outln!("  initial Δt:       {:.4e} s", r.initial_dt);
-            outln!(
-                "  steps:            {} or more to t = {} s (Δt shrinks as the material speeds up or dilates)",
-                r.estimated_steps,
-                scene.end_time()
-            );
-            if let Some(n) = r.initial_state_steps {
-                outln!("  initial state:    gravity ramp, {n} steps or more before t = 0");
-            }
-            outln!("  memory:           about {:.2} MB", r.memory_bytes as f64 / 1e6);
-            outln!(
-                "  frames:           {} (about {:.1} MB on disk)",
-                r.frames,
-                r.frame_bytes as f64 / 1e6
-            );
+    match mpm_run::check(&scene) {
+        Ok(checked) => {
+            outln!("{checked}");
             ExitCode::SUCCESS
         }
         Err(e) => run_failure(&e),
@@ -472,37 +402,31 @@ fn section(
     out: Option<&Path>,
     force: bool,
 ) -> ExitCode {
-    let stations = mpm_dem::Raster::read_within(dem, mpm_run::limits::available_memory())
-        .and_then(|r| r.section(from, to, spacing.unwrap_or(r.cell())));
-    let stations = match stations {
+    let section = match mpm_run::section(dem, from, to, spacing) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(2);
         }
     };
-    let mut csv = mpm_output::csv::SECTION_HEADER.to_string();
-    mpm_output::csv::section(&mut csv, &stations);
     let Some(out) = out else {
-        out!("{csv}");
+        out!("{}", section.csv);
         return ExitCode::SUCCESS;
     };
     if out.exists() && !force {
         eprintln!("error: {} exists; pass --force to overwrite it", out.display());
         return ExitCode::from(2);
     }
-    if let Err(e) = mpm_output::atomic::write(out, csv.as_bytes()) {
+    if let Err(e) = mpm_output::atomic::write(out, section.csv.as_bytes()) {
         eprintln!("error: {e}");
         return ExitCode::from(1);
     }
-    let (lo, hi) = stations
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.z), b.max(p.z)));
-    let last = stations.last().map_or(0.0, |p| p.station);
+    let (lo, hi) = section.heights;
     outln!(
-        "wrote {}: {} stations over {last:.3} m, z from {lo:.3} to {hi:.3} m",
+        "wrote {}: {} stations over {:.3} m, z from {lo:.3} to {hi:.3} m",
         out.display(),
-        stations.len()
+        section.stations,
+        section.length
     );
     ExitCode::SUCCESS
 }

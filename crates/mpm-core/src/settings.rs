@@ -59,6 +59,16 @@ pub enum Transfer {
     Apic,
 }
 
+impl Transfer {
+    /// the transfer's usual name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transfer::Flip => "FLIP",
+            Transfer::Apic => "APIC",
+        }
+    }
+}
+
 /// How the FLIP update's PIC share β (the solver settings' `pic_fraction`) is spread over the
 /// particles (beyond the paper, which has no PIC share).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -202,11 +202,7 @@ impl Scene {
 
     /// `mpm check`: the full validation and estimates, as JSON text.
     fn check_json(&self, py: Python<'_>) -> PyResult<String> {
-        let report = match &self.inner {
-            mpm_run::AnyScene::Plane(s) => mpm_run::check_scene(s),
-            mpm_run::AnyScene::Space(s) => mpm_run::check_space_scene(s),
-        }
-        .map_err(|e| run_error(py, e))?;
+        let report = mpm_run::check(&self.inner).map_err(|e| run_error(py, e))?.report;
         serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))
     }
 

@@ -53,6 +53,7 @@
 // range, fix); it is returned once, before any step, so its size costs nothing.
 #![allow(clippy::result_large_err)]
 
+mod check;
 mod common;
 mod driver;
 mod element;
@@ -62,11 +63,13 @@ mod options;
 mod progress;
 mod resume;
 mod run;
+mod section;
 mod simulation;
 mod space;
 
 pub use progress::{Progress, ProgressSink};
 
+pub use check::{Checked, check};
 pub use common::CheckReport;
 pub use element::{ElementCaseResult, ElementTest, ElementTestOptions, run_element_test};
 pub use error::RunError;
@@ -77,6 +80,7 @@ pub use mpm_scene::{DtStats, RunStatus, RunSummary, RunoutMetrics};
 pub use options::{MAX_THREADS, available_threads};
 pub use resume::resume;
 pub use run::{RunOptions, check_scene, run_scene};
+pub use section::{Section, section};
 pub use simulation::{Advance, Limit, POLL, ParticleFields, Simulation, SpaceFields};
 pub use space::{check_space_scene, run_space_scene};
 // The scene library, re-exported so that a front end needs one import path.

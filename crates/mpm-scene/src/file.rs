@@ -328,6 +328,14 @@ impl ShapeFunctionKind {
             ShapeFunctionKind::Bspline => "bspline",
         }
     }
+
+    /// the name in a scene of `dimension` dimensions: `bilinear` is `trilinear` in 3D.
+    pub fn name_in(self, dimension: usize) -> &'static str {
+        match self {
+            ShapeFunctionKind::Bilinear if dimension == 3 => "trilinear",
+            other => other.name(),
+        }
+    }
 }
 
 /// Named speed/accuracy settings (see [`crate::presets`]).
