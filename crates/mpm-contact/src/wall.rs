@@ -196,12 +196,26 @@ impl<'de> Deserialize<'de> for Wall {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
 
+    /// (x, y) in the plane, (x, y, 0.4) in space: the plane tests hold on any section.
+    fn at(x: f64, y: f64) -> Vector {
+        #[cfg(not(feature = "dim3"))]
+        return Vector::new(x, y);
+        #[cfg(feature = "dim3")]
+        Vector::new(x, y, 0.4)
+    }
+
+    /// the direction (x, y), in the x–y plane in both builds.
+    fn along(x: f64, y: f64) -> Vector {
+        at(x, y) - at(0.0, 0.0)
+    }
+
     const FREE: Friction = Friction::Coulomb { mu: 0.0 };
 
+    #[cfg(not(feature = "dim3"))]
     #[test]
     fn a_segment_faces_its_left_and_measures_from_its_start() {
         // from (1, 0) up to (1, 2): the material is on the left, at x < 1.
@@ -219,16 +233,17 @@ mod tests {
     fn touching_needs_the_edge_on_the_face_or_reaching_it_within_the_step() {
         let w = Wall::plane(Vector::ZERO, Vector::Y, FREE).unwrap();
         let r = 0.1;
-        assert!(w.touches(Vector::new(3.0, r), r, Vector::ZERO, 1e-3));
-        assert!(w.touches(Vector::new(3.0, r * 1.005), r, Vector::ZERO, 1e-3));
-        assert!(!w.touches(Vector::new(3.0, r * 1.02), r, Vector::ZERO, 1e-3));
+        assert!(w.touches(at(3.0, r), r, Vector::ZERO, 1e-3));
+        assert!(w.touches(at(3.0, r * 1.005), r, Vector::ZERO, 1e-3));
+        assert!(!w.touches(at(3.0, r * 1.02), r, Vector::ZERO, 1e-3));
         // 1 cm above, falling at 1 m/s: reached within 0.02 s, not within 0.005 s
-        assert!(w.touches(Vector::new(3.0, r + 0.01), r, -Vector::Y, 0.02));
-        assert!(!w.touches(Vector::new(3.0, r + 0.01), r, -Vector::Y, 0.005));
+        assert!(w.touches(at(3.0, r + 0.01), r, -Vector::Y, 0.02));
+        assert!(!w.touches(at(3.0, r + 0.01), r, -Vector::Y, 0.005));
         // a point that has entered the solid still touches
-        assert!(w.touches(Vector::new(3.0, -0.5), r, Vector::ZERO, 1e-3));
+        assert!(w.touches(at(3.0, -0.5), r, Vector::ZERO, 1e-3));
     }
 
+    #[cfg(not(feature = "dim3"))]
     #[test]
     fn a_point_beside_a_segment_does_not_touch_it() {
         // a check dam 1 m high at x = 2, thickness 0.2 m, material on its left
@@ -247,13 +262,24 @@ mod tests {
 
     #[test]
     fn nodes_on_the_face_are_held_by_the_paper_rule() {
-        let w = Wall::plane(Vector::new(0.0, 1.0), Vector::new(0.6, 0.8), FREE).unwrap();
-        let on_face = Vector::new(0.0, 1.0) + 3.0 * w.boundary().tangent();
+        let w = Wall::plane(at(0.0, 1.0), along(0.6, 0.8), FREE).unwrap();
+        let on_face = at(0.0, 1.0) + 3.0 * along(0.8, -0.6);
+        assert!(w.normal().dot(along(0.8, -0.6)).abs() < 1e-15, "a direction along the face");
         assert!(w.holds_node(on_face));
         assert!(w.holds_node(on_face - 0.1 * w.normal()));
         assert!(!w.holds_node(on_face + 0.1 * w.normal()));
     }
 
+    #[test]
+    fn a_plane_through_no_point_is_refused() {
+        assert!(matches!(
+            Wall::plane(at(f64::NAN, 0.0), Vector::Y, FREE),
+            Err(ContactError::NonFinitePoint { .. })
+        ));
+        assert!(Wall::plane(at(0.0, 0.0), Vector::ZERO, FREE).is_err(), "no normal");
+    }
+
+    #[cfg(not(feature = "dim3"))]
     #[test]
     fn bad_walls_are_refused() {
         let p = Vector::new(1.0, 1.0);

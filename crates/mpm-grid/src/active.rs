@@ -380,16 +380,19 @@ impl fmt::Debug for ActiveNodes {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::node;
 
     #[test]
     fn split_and_block_origin_round_trip_including_negative_ghosts() {
-        for (i, j) in [(0, 0), (-1, -1), (7, 8), (-9, 17), (i32::MAX, i32::MIN), (i32::MIN, 5)] {
-            let (key, bit) = split(NodeId::new(i, j));
+        // the farthest nodes a key holds: i32's range in the plane, ±2²² in space.
+        let far = if crate::DIM == 3 { (1 << 22) - 1 } else { i32::MAX };
+        for (i, j) in [(0, 0), (-1, -1), (7, 8), (-9, 17), (far, -far - 1), (-far - 1, 5)] {
+            let (key, bit) = split(node(i, j));
             assert_ne!(key, NO_KEY);
-            assert_eq!(node_at(block_origin(key), bit), NodeId::new(i, j));
+            assert_eq!(node_at(block_origin(key), bit), node(i, j));
         }
     }
 
@@ -400,14 +403,7 @@ mod tests {
         let stencils: Vec<[NodeId; 4]> = (-10..20)
             .flat_map(|j| (-10..20).map(move |i| (i, j)))
             .filter(|(i, j)| (i + 3 * j) % 7 == 0)
-            .map(|(i, j)| {
-                [
-                    NodeId::new(i, j),
-                    NodeId::new(i + 1, j),
-                    NodeId::new(i, j + 1),
-                    NodeId::new(i + 1, j + 1),
-                ]
-            })
+            .map(|(i, j)| [node(i, j), node(i + 1, j), node(i, j + 1), node(i + 1, j + 1)])
             .collect();
         a.rebuild(stencils.iter().flatten().copied());
         for s in &stencils {
@@ -417,7 +413,7 @@ mod tests {
             }
         }
         // A node outside the set is reported as u32::MAX, its neighbours still found.
-        let probe = [stencils[0][0], NodeId::new(1000, 1000)];
+        let probe = [stencils[0][0], node(1000, 1000)];
         let got = a.indices_of(&probe);
         assert_eq!(got[0] as usize, a.index_of(probe[0]).unwrap());
         assert_eq!(got[1], u32::MAX);
@@ -426,10 +422,10 @@ mod tests {
     #[test]
     fn empty_set_answers_none() {
         let mut a = ActiveNodes::new();
-        assert_eq!(a.index_of(NodeId::new(0, 0)), None);
+        assert_eq!(a.index_of(node(0, 0)), None);
         a.rebuild([]);
         assert!(a.is_empty());
-        assert_eq!(a.index_of(NodeId::new(0, 0)), None);
+        assert_eq!(a.index_of(node(0, 0)), None);
         assert_eq!(a.block_ranges().count(), 0);
     }
 
@@ -437,9 +433,8 @@ mod tests {
     fn growth_keeps_every_block_reachable() {
         let mut a = ActiveNodes::new();
         // 40 × 40 blocks force several doublings of the 64-slot table.
-        let nodes: Vec<_> = (0..40)
-            .flat_map(|bj| (0..40).map(move |bi| NodeId::new(8 * bi - 100, 8 * bj + 3)))
-            .collect();
+        let nodes: Vec<_> =
+            (0..40).flat_map(|bj| (0..40).map(move |bi| node(8 * bi - 100, 8 * bj + 3))).collect();
         a.rebuild(nodes.iter().copied());
         assert_eq!(a.len(), 1600);
         assert_eq!(a.block_count(), 1600);
@@ -449,6 +444,6 @@ mod tests {
         for n in &nodes {
             assert_eq!(a.nodes()[a.index_of(*n).unwrap()], *n);
         }
-        assert_eq!(a.index_of(NodeId::new(-99, 3)), None);
+        assert_eq!(a.index_of(node(-99, 3)), None);
     }
 }

@@ -101,7 +101,7 @@ impl ShapeFunctions<WIDE> for QuadraticBSpline {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -56,10 +56,9 @@ pub fn with_regular_shape<J: ShapeJob>(
     })
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Vector;
 
     /// the stencil size N of the shape functions a kind builds.
     struct StencilSize;
@@ -73,10 +72,15 @@ mod tests {
 
     #[test]
     fn each_kind_builds_its_own_stencil_and_gimp_refuses_no_particles() {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.1), [10, 10]).unwrap();
-        assert_eq!(with_regular_shape(RegularShape::Bilinear, grid, 2, StencilSize).unwrap(), 4);
-        assert_eq!(with_regular_shape(RegularShape::Gimp, grid, 2, StencilSize).unwrap(), 9);
-        assert_eq!(with_regular_shape(RegularShape::BSpline, grid, 2, StencilSize).unwrap(), 9);
+        let grid = crate::testing::grid([0.0; 2], [0.1; 2], [10, 10]).unwrap();
+        let (linear, wide) = (crate::testing::LINEAR, 3usize.pow(crate::DIM as u32));
+        assert_eq!((linear, wide), if crate::DIM == 3 { (8, 27) } else { (4, 9) });
+        assert_eq!(
+            with_regular_shape(RegularShape::Bilinear, grid, 2, StencilSize).unwrap(),
+            linear
+        );
+        assert_eq!(with_regular_shape(RegularShape::Gimp, grid, 2, StencilSize).unwrap(), wide);
+        assert_eq!(with_regular_shape(RegularShape::BSpline, grid, 2, StencilSize).unwrap(), wide);
         assert!(with_regular_shape(RegularShape::Gimp, grid, 0, StencilSize).is_err());
     }
 }

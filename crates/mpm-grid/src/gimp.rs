@@ -327,7 +327,7 @@ impl ShapeFunctions<WIDE> for Gimp {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -352,9 +352,13 @@ mod tests {
 
     #[test]
     fn half_size_beyond_half_a_cell_is_rejected() {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.1), [4, 4]).unwrap();
-        let err = Gimp::new(grid, Vector::new(0.05, 0.06)).unwrap_err();
+        let grid = crate::testing::grid([0.0; 2], [0.1; 2], [4, 4]).unwrap();
+        let mut half = Vector::splat(0.05);
+        half.y = 0.06;
+        let err = Gimp::new(grid, half).unwrap_err();
         assert!(matches!(err, GridError::InvalidParticleHalfSize { axis: "y", .. }));
-        assert!(Gimp::with_particles_per_cell(grid, [2, 0]).is_err());
+        let mut per_cell = [2; DIM];
+        per_cell[1] = 0;
+        assert!(Gimp::with_particles_per_cell(grid, per_cell).is_err());
     }
 }

@@ -67,6 +67,8 @@ mod tensor;
 mod terrain;
 #[cfg(feature = "dim3")]
 mod terrain3d;
+#[doc(hidden)]
+pub mod testing;
 
 pub use active::{ActiveNodes, BLOCK_SIDE};
 pub use bilinear::Bilinear;

@@ -237,31 +237,34 @@ impl RegularGrid {
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{at, cells, grid, node};
 
     #[test]
     fn locate_classifies_points() {
-        let g = RegularGrid::new(Vector::new(-1.0, 0.0), Vector::new(0.5, 0.25), [4, 8]).unwrap();
-        let c = g.locate(Vector::new(0.0, 0.125)).unwrap();
-        assert_eq!(c.cell, NodeId::new(2, 0));
+        let g = grid([-1.0, 0.0], [0.5, 0.25], [4, 8]).unwrap();
+        let c = g.locate(at(0.0, 0.125)).unwrap();
+        assert_eq!(c.cell, node(2, 0));
         assert_eq!((c.xi, c.eta), (-1.0, 0.0));
-        assert_eq!(g.locate(Vector::new(1.0, 2.0)).unwrap().cell, NodeId::new(3, 7));
+        assert_eq!(g.locate(at(1.0, 2.0)).unwrap().cell, node(3, 7));
         assert!(matches!(
-            g.locate(Vector::new(0.0, -0.1)),
+            g.locate(at(0.0, -0.1)),
             Err(LocateError::BelowGround { ground_y, .. }) if ground_y == 0.0
         ));
-        assert!(matches!(g.locate(Vector::new(1.1, 0.1)), Err(LocateError::Outside { .. })));
-        assert!(matches!(g.locate(Vector::new(0.0, 2.1)), Err(LocateError::Outside { .. })));
-        assert!(matches!(g.locate(Vector::new(f64::NAN, 0.1)), Err(LocateError::NonFinite { .. })));
+        assert!(matches!(g.locate(at(1.1, 0.1)), Err(LocateError::Outside { .. })));
+        assert!(matches!(g.locate(at(0.0, 2.1)), Err(LocateError::Outside { .. })));
+        assert!(matches!(g.locate(at(f64::NAN, 0.1)), Err(LocateError::NonFinite { .. })));
     }
 
     #[test]
     fn bad_sizes_are_named() {
-        let err = RegularGrid::new(Vector::ZERO, Vector::new(0.1, 0.0), [1, 1]).unwrap_err();
+        let mut flat = Vector::splat(0.1);
+        flat.y = 0.0;
+        let err = RegularGrid::new(Vector::ZERO, flat, cells([1, 1])).unwrap_err();
         assert_eq!(err, GridError::NonPositiveSize { what: Extent::CellSize(1), value: 0.0 });
-        let err = RegularGrid::new(Vector::ZERO, Vector::ONE, [3, 0]).unwrap_err();
+        let err = RegularGrid::new(Vector::ZERO, Vector::ONE, cells([3, 0])).unwrap_err();
         assert!(matches!(err, GridError::CellCountOutOfRange { what: Extent::Cells(1), .. }));
     }
 }
