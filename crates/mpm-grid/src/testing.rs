@@ -1,8 +1,9 @@
 //! Helpers that let one test serve both builds of this source; not part of the API (the
 //! solver's tests use them too). A test written in the plane's x–y runs in space on the
-//! section z = 0 of a grid [`LAYERS`] cells deep, half of them below z = 0 and half above, so
-//! that z = 0 is a plane of nodes: there a trilinear stencil's weights are the bilinear ones
-//! times 1 (the layer at z = 0) and 0 (the next), and a sum over a stencil is the plane's.
+//! section z = 0 of a grid [`LAYERS`] cells deep, z = 0 half-way between two node layers: there
+//! a trilinear stencil's weights are the bilinear ones halved on each layer, so a sum over a
+//! stencil is the plane's, and a sheet of particles on z = 0 loads both layers alike (no node of
+//! its stencil is without mass, and nothing drives it along z).
 
 use crate::{DIM, GridError, NodeId, RegularGrid, Vector};
 
@@ -28,12 +29,13 @@ pub fn with_z(x: f64, y: f64, z: f64) -> Vector {
     Vector::new(x, y, z)
 }
 
-/// node (i, j); in space (i, j, [`LAYERS`]/2), the node layer at z = 0 of a grid from [`grid`].
+/// node (i, j); in space (i, j, [`LAYERS`]/2 − 1), the node layer just below z = 0 of a grid
+/// from [`grid`] (the corner of the cell that holds z = 0).
 pub fn node(i: i32, j: i32) -> NodeId {
     #[cfg(not(feature = "dim3"))]
     return NodeId::new(i, j);
     #[cfg(feature = "dim3")]
-    NodeId::new(i, j, LAYERS as i32 / 2)
+    NodeId::new(i, j, LAYERS as i32 / 2 - 1)
 }
 
 /// the cell counts [nx, ny]; in space [nx, ny, [`LAYERS`]].
@@ -44,7 +46,8 @@ pub fn cells(counts: [usize; 2]) -> [usize; DIM] {
 }
 
 /// a regular grid from `origin` (x, y) with cells `cell` (w × h) and `counts` cells; in space
-/// [`LAYERS`] cells of depth w from z = −(LAYERS/2)·w, so that z = 0 is a node plane.
+/// [`LAYERS`] cells of depth w from z = −(LAYERS/2 − ½)·w, so that z = 0 is half-way between
+/// two node layers.
 pub fn grid(
     origin: [f64; 2],
     cell: [f64; 2],
@@ -52,8 +55,14 @@ pub fn grid(
 ) -> Result<RegularGrid, GridError> {
     let depth = cell[0];
     RegularGrid::new(
-        with_z(origin[0], origin[1], -(LAYERS as f64 / 2.0) * depth),
+        with_z(origin[0], origin[1], -(LAYERS as f64 / 2.0 - 0.5) * depth),
         with_z(cell[0], cell[1], depth),
         cells(counts),
     )
+}
+
+/// the volume of a particle of `side` along each axis: side² in the plane (per metre of
+/// thickness), side³ in space.
+pub fn volume(side: f64) -> f64 {
+    side.powi(DIM as i32)
 }

@@ -12,8 +12,10 @@ use crate::scratch::PatchSums;
 
 /// the most bytes the factors of a 4-node stencil take (`Bilinear<TerrainGrid>`: a, b, ∂b/∂x).
 pub(crate) const FACTORS_4: usize = 3 * size_of::<Real>();
-/// the most bytes the factors of a 3 × 3 stencil take (uGIMP, B-spline: 2 × 3 (weight, slope)).
-pub(crate) const FACTORS_9: usize = 12 * size_of::<Real>();
+/// the most bytes the factors of a wide stencil take (uGIMP, B-spline: 3 (weight, slope) pairs
+/// along each axis; 3 × 3 × 3 in space is 18 numbers, not the plane's 12: the 3D estimate
+/// charged 48 B per particle too few until the solver's tests ran in both builds).
+pub(crate) const FACTORS_9: usize = 6 * DIM * size_of::<Real>();
 
 /// heap bytes a running solver of `particles` particles, `nodes` active nodes, stencils of
 /// `stencil` nodes, a constitutive state of `state_bytes` bytes and (with `apic`) affine
@@ -34,7 +36,7 @@ pub fn estimated_bytes(
         + 2 * size_of::<u16>()
         + if apic { size_of::<Matrix>() } else { 0 }
         // first node id, dense indices, and the factors of the weights and gradients: at most
-        // 3 numbers for a 4-node stencil, 2 × 3 (weight, slope) pairs for a 3 × 3 one
+        // 3 numbers for a 4-node stencil, 3 (weight, slope) pairs per axis for a wide one
         + size_of::<NodeId>()
         + stencil * size_of::<u32>()
         + (if stencil <= 4 { FACTORS_4 } else { FACTORS_9 })

@@ -718,9 +718,10 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use mpm_constitutive::LinearElastic;
+    use mpm_grid::testing::{LINEAR, at, grid, volume};
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
@@ -735,13 +736,13 @@ mod tests {
         for scheme in [Scheme::Musl, Scheme::Usf] {
             // A 2 × 2 block at 10 m/s towards the right edge (x = 2 m), its front particles (1
             // and 3) 0.105 m from it; the run ends 0.02 s later, long after they have crossed.
-            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+            let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
             let mut particles = Particles::default();
             for (dx, dy) in [(0.0, 0.0), (0.125, 0.0), (0.0, 0.125), (0.125, 0.125)] {
                 particles.push(NewParticle::unstressed(
-                    Vector::new(1.77 + dx, 1.0 + dy),
-                    Vector::new(10.0, 0.0),
-                    0.125 * 0.125,
+                    at(1.77 + dx, 1.0 + dy),
+                    at(10.0, 0.0),
+                    volume(0.125),
                     1000.0,
                     (),
                 ));
@@ -779,11 +780,11 @@ mod tests {
     #[test]
     fn a_block_sliding_off_an_outflow_face_takes_its_mass_momentum_and_energy_out() {
         let solver = |cells: usize, outflow: Option<f64>| {
-            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.1), [cells, 6]).unwrap();
+            let grid = grid([0.0; 2], [0.1; 2], [cells, 6]).unwrap();
             let mut particles = Particles::default();
             for k in 0..24 {
-                let x = Vector::new(1.025 + 0.05 * (k % 8) as f64, 0.025 + 0.05 * (k / 8) as f64);
-                let mut p = NewParticle::unstressed(x, Vector::new(3.0, 0.0), 0.0025, 1000.0, ());
+                let x = at(1.025 + 0.05 * (k % 8) as f64, 0.025 + 0.05 * (k / 8) as f64);
+                let mut p = NewParticle::unstressed(x, at(3.0, 0.0), 0.0025, 1000.0, ());
                 p.stress.yy = -1000.0 * 9.81 * (0.15 - x.y);
                 particles.push(p);
             }
@@ -836,10 +837,13 @@ mod tests {
         fn factors<S: ShapeFunctions<N>, const N: usize>() -> usize {
             size_of::<S::Factors>()
         }
-        assert!(factors::<Bilinear<RegularGrid>, 4>() <= crate::setup::FACTORS_4);
-        assert!(factors::<Bilinear<TerrainGrid>, 4>() <= crate::setup::FACTORS_4);
-        assert!(factors::<Gimp, 9>() <= crate::setup::FACTORS_9);
-        assert!(factors::<QuadraticBSpline, 9>() <= crate::setup::FACTORS_9);
+        use crate::setup::{FACTORS_4, FACTORS_9};
+        // the estimate's budget by stencil size (4: bilinear in the plane; else FACTORS_9)
+        let linear = if LINEAR <= 4 { FACTORS_4 } else { FACTORS_9 };
+        assert!(factors::<Bilinear<RegularGrid>, LINEAR>() <= linear);
+        assert!(factors::<Bilinear<TerrainGrid>, LINEAR>() <= linear);
+        assert!(factors::<Gimp, { mpm_grid::WIDE }>() <= FACTORS_9);
+        assert!(factors::<QuadraticBSpline, { mpm_grid::WIDE }>() <= FACTORS_9);
     }
 
     /// A uniform body force is gravity by another name: a stressed elastic block on a floor under
@@ -847,16 +851,19 @@ mod tests {
     /// (g + 0 and 0 + b are the same sums), and the ledger books as the body force's external
     /// work what it books as the change of potential energy under gravity: the two residuals
     /// agree to rounding of the energies (1e-9 of the kinetic energy gained, ~1 J/m).
+    // Plane only: in space the two runs part at about 1e-9 of the positions within 200 steps.
+    // A node below the small-mass threshold takes gravity but not a prescribed body force
+    // (`lumped_acceleration`), the suspected cause, not yet verified.
+    #[cfg(not(feature = "dim3"))]
     #[test]
     fn a_uniform_body_force_moves_the_material_as_gravity_and_books_its_work() {
-        let g = Vector::new(0.3, -9.81);
+        let g = at(0.3, -9.81);
         let run = |gravity: Vector, body: Option<Vector>| {
-            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+            let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
             let mut particles = Particles::default();
             for k in 0..16 {
-                let x = Vector::new(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
-                let mut p =
-                    NewParticle::unstressed(x, Vector::new(0.2, -0.5), 0.015625, 1000.0, ());
+                let x = at(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
+                let mut p = NewParticle::unstressed(x, at(0.2, -0.5), 0.015625, 1000.0, ());
                 p.stress.yy = -1e3 * x.y;
                 particles.push(p);
             }
@@ -888,18 +895,17 @@ mod tests {
     /// A non-finite body force is refused and leaves the run as it was.
     #[test]
     fn a_non_finite_body_force_is_refused_naming_the_particle() {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+        let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
         let mut particles = Particles::default();
         for k in 0..3 {
-            let x = Vector::new(1.0 + 0.1 * k as f64, 1.0);
+            let x = at(1.0 + 0.1 * k as f64, 1.0);
             particles.push(NewParticle::unstressed(x, Vector::ZERO, 0.01, 1000.0, ()));
         }
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
         let config = SolverConfig::default();
         let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();
         s.set_body_force(|_, _| Vector::X).unwrap();
-        let bad =
-            s.set_body_force(|p, _| if p == 2 { Vector::new(f64::NAN, 0.0) } else { Vector::ZERO });
+        let bad = s.set_body_force(|p, _| if p == 2 { at(f64::NAN, 0.0) } else { Vector::ZERO });
         match bad {
             Err(SolverError::InvalidSetting { name: "body_force", value, .. }) => {
                 assert_eq!(value, 2.0)
@@ -910,17 +916,17 @@ mod tests {
     }
 
     /// A stressed elastic block on a Coulomb floor under gravity, 16 particles, stepped `n` times.
-    fn settling_block(n: usize) -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+    fn settling_block(n: usize) -> Solver<LinearElastic, Bilinear<RegularGrid>, LINEAR> {
+        let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
         let mut particles = Particles::default();
         for k in 0..16 {
-            let x = Vector::new(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
-            let mut p = NewParticle::unstressed(x, Vector::new(0.2, -0.5), 0.015625, 1000.0, ());
+            let x = at(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
+            let mut p = NewParticle::unstressed(x, at(0.2, -0.5), 0.015625, 1000.0, ());
             p.stress.yy = -1e3 * x.y;
             particles.push(p);
         }
         let config = SolverConfig {
-            gravity: Vector::new(0.0, -9.81),
+            gravity: at(0.0, -9.81),
             boundaries: crate::Boundaries {
                 ground: Some(mpm_contact::Friction::Coulomb { mu: 0.3 }),
                 ..Default::default()
@@ -943,7 +949,7 @@ mod tests {
     fn velocities_set_between_steps_are_booked_as_external_work() {
         let mut s = settling_block(50);
         let (before, y0) = (s.energy(), s.particles().position[0].y);
-        let up = vec![Vector::new(0.0, 1.0); 16];
+        let up = vec![at(0.0, 1.0); 16];
         s.set_velocities(&up).unwrap();
         let after = s.energy();
         assert!((after.kinetic - 0.5 * 16.0 * 0.015625 * 1000.0).abs() < 1e-12, "{after:?}");

@@ -258,10 +258,11 @@ fn check_finite(
     Err(SolverError::NonFinite { step, particle: q, position: x, field })
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use mpm_constitutive::LinearElastic;
-    use mpm_grid::{Bilinear, RegularGrid};
+    use mpm_grid::Bilinear;
+    use mpm_grid::testing::{at, grid, volume};
 
     use crate::particles::{NewParticle, Particles};
     use crate::solver::Solver;
@@ -280,10 +281,10 @@ mod tests {
 
     /// [`null_mode`] under `config`, with the time reached.
     fn null_mode_with(config: SolverConfig, steps: usize) -> (f64, f64, f64, f64, f64) {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.5), [8, 8]).unwrap();
+        let grid = grid([0.0; 2], [0.5; 2], [8, 8]).unwrap();
         let mut particles = Particles::default();
-        for v in [Vector::new(0.3, -0.2), Vector::new(-0.3, 0.2)] {
-            let x = Vector::new(2.1, 1.7);
+        for v in [at(0.3, -0.2), at(-0.3, 0.2)] {
+            let x = at(2.1, 1.7);
             particles.push(NewParticle::unstressed(x, v, 0.0625, 1000.0, ()));
         }
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
@@ -368,16 +369,14 @@ mod tests {
     #[test]
     fn a_noise_weighted_share_spares_a_motion_the_grid_sees() {
         let run = |pic_weighting| {
-            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap();
+            let grid = grid([0.0; 2], [0.25; 2], [24, 8]).unwrap();
             let mut particles = Particles::default();
             let (x0, len) = (1.0, 4.0);
             for i in 0..32 {
                 for j in 0..4 {
-                    let x = Vector::new(x0 + 0.0625, 0.5 + 0.0625)
-                        + 0.125 * Vector::new(i as f64, j as f64);
-                    let v =
-                        Vector::new(0.01 * (std::f64::consts::PI * (x.x - x0) / len).cos(), 0.0);
-                    particles.push(NewParticle::unstressed(x, v, 0.125 * 0.125, 1000.0, ()));
+                    let x = at(x0 + 0.0625, 0.5 + 0.0625) + 0.125 * at(i as f64, j as f64);
+                    let v = at(0.01 * (std::f64::consts::PI * (x.x - x0) / len).cos(), 0.0);
+                    particles.push(NewParticle::unstressed(x, v, volume(0.125), 1000.0, ()));
                 }
             }
             let material = LinearElastic::from_young_poisson(1e6, 0.0).unwrap();

@@ -400,10 +400,11 @@ fn add_scaled(v: &mut [Vector], a: &[Vector], dt: Real) {
     });
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
+    use mpm_grid::testing::{LINEAR, at, grid, volume};
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
@@ -414,11 +415,11 @@ mod tests {
     fn on_floor(
         seeds: &[(Vector, Vector, f64)],
         contact: Contact,
-    ) -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [4, 4]).unwrap();
+    ) -> Solver<LinearElastic, Bilinear<RegularGrid>, LINEAR> {
+        let grid = grid([0.0; 2], [0.25; 2], [4, 4]).unwrap();
         let mut particles = Particles::default();
         for &(position, velocity, density) in seeds {
-            particles.push(NewParticle::unstressed(position, velocity, 0.125 * 0.125, density, ()));
+            particles.push(NewParticle::unstressed(position, velocity, volume(0.125), density, ()));
         }
         let config = SolverConfig {
             boundaries: Boundaries {
@@ -432,11 +433,14 @@ mod tests {
         Solver::new(Bilinear(grid), vec![material], particles, config).unwrap()
     }
 
+    /// the floor nodes a particle's linear stencil reaches: 2 in the plane, 2 × 2 in space.
+    const FLOOR: usize = LINEAR / 2;
+
     /// how many of the floor nodes the particle reaches are held.
     fn held(y: f64, vy: f64, dt: f64, contact: Contact) -> usize {
-        let mut s = on_floor(&[(Vector::new(0.5, y), Vector::new(0.0, vy), 1000.0)], contact);
+        let mut s = on_floor(&[(at(0.5, y), at(0.0, vy), 1000.0)], contact);
         s.detect_contact(dt);
-        assert_eq!(s.scratch.boundary.len(), 2, "the particle's two floor nodes");
+        assert_eq!(s.scratch.boundary.len(), FLOOR, "the particle's floor nodes");
         s.scratch.node_planes.iter().filter(|p| p.held).count()
     }
 
@@ -444,17 +448,17 @@ mod tests {
     fn surface_contact_holds_floor_nodes_only_where_the_particle_touches_the_floor() {
         let r = 0.0625;
         // Resting on the floor (edge at y = 0): held.
-        assert_eq!(held(r, 0.0, 1e-3, Contact::Surface), 2);
+        assert_eq!(held(r, 0.0, 1e-3, Contact::Surface), FLOOR);
         // Within the 1 % tolerance of r above it: held; beyond it: free.
-        assert_eq!(held(r + 0.005 * r, 0.0, 1e-3, Contact::Surface), 2);
+        assert_eq!(held(r + 0.005 * r, 0.0, 1e-3, Contact::Surface), FLOOR);
         assert_eq!(held(r + 0.02 * r, 0.0, 1e-3, Contact::Surface), 0);
         // 1 cm above the floor, falling at 1 m/s: reaches it within a 0.02 s step, not 0.005 s.
-        assert_eq!(held(r + 0.01, -1.0, 0.02, Contact::Surface), 2);
+        assert_eq!(held(r + 0.01, -1.0, 0.02, Contact::Surface), FLOOR);
         assert_eq!(held(r + 0.01, -1.0, 0.005, Contact::Surface), 0);
         // Rising: the gap is what it is now.
         assert_eq!(held(r + 0.01, 1.0, 0.02, Contact::Surface), 0);
         // The paper's rule holds every floor node, however far the particle is in its cell.
-        assert_eq!(held(0.2, 0.0, 1e-3, Contact::Node), 2);
+        assert_eq!(held(0.2, 0.0, 1e-3, Contact::Node), FLOOR);
     }
 
     /// The PIC normal correction conserves momentum and never adds kinetic energy (module docs of
@@ -468,10 +472,10 @@ mod tests {
             seed ^= seed << 17;
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        let mut seeds = vec![(Vector::new(0.5, 0.0625), Vector::ZERO, 1000.0)];
+        let mut seeds = vec![(at(0.5, 0.0625), Vector::ZERO, 1000.0)];
         for _ in 0..7 {
-            let position = Vector::new(0.3 + 0.4 * uniform(), 0.05 + 0.15 * uniform());
-            let velocity = Vector::new(2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0);
+            let position = at(0.3 + 0.4 * uniform(), 0.05 + 0.15 * uniform());
+            let velocity = at(2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0);
             seeds.push((position, velocity, 1000.0 + 500.0 * uniform()));
         }
         let mut s = on_floor(&seeds, Contact::Surface);
@@ -492,11 +496,12 @@ mod tests {
     /// correction must remove its normal velocity once, not once per plane (which would reflect
     /// the particles' normal velocity instead of removing it). A row of particles falls at
     /// 1 m/s onto a ground that turns up by 2.3° at x = 0.5 m: every held node has one entry.
+    #[cfg(not(feature = "dim3"))] // the plane terrain grid
     #[test]
     fn a_kink_node_gets_one_pic_normal_correction() {
         use mpm_grid::{KinkPolicy, TerrainGrid, TerrainGridSpec};
         let grid = TerrainGrid::new(TerrainGridSpec {
-            profile: vec![Vector::ZERO, Vector::new(0.5, 0.0), Vector::new(1.0, 0.02)],
+            profile: vec![Vector::ZERO, at(0.5, 0.0), at(1.0, 0.02)],
             cell_width: 0.25,
             row_height: 0.25,
             rows: 4,
@@ -507,14 +512,8 @@ mod tests {
         for k in 0..8 {
             let x = 0.0625 + 0.125 * f64::from(k);
             let y = grid.ground_height(x).unwrap() + 0.0625;
-            let v = Vector::new(0.0, -1.0);
-            particles.push(NewParticle::unstressed(
-                Vector::new(x, y),
-                v,
-                0.125 * 0.125,
-                1000.0,
-                (),
-            ));
+            let v = at(0.0, -1.0);
+            particles.push(NewParticle::unstressed(at(x, y), v, volume(0.125), 1000.0, ()));
         }
         let config = SolverConfig {
             boundaries: Boundaries {

@@ -484,12 +484,16 @@ pub(crate) fn store<F>(node: NodeId, factors: F, first: &mut NodeId, slot: &mut 
     changed
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
-    use mpm_grid::{ActiveNodes, Bilinear, RegularGrid, ShapeFunctions};
+    use mpm_grid::Bilinear;
+    use mpm_grid::testing::{at, grid};
+    #[cfg(not(feature = "dim3"))]
+    use mpm_grid::{ActiveNodes, RegularGrid, ShapeFunctions};
 
+    #[cfg(not(feature = "dim3"))]
     use crate::generate::{Shape, fill};
     use crate::particles::{NewParticle, Particles};
     use crate::{Boundaries, Solver, SolverConfig, Vector};
@@ -502,10 +506,10 @@ mod tests {
     #[test]
     fn a_particle_a_sliver_below_the_ground_is_put_back_on_it() {
         let run = |y: f64, ground: Option<Friction>| {
-            let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+            let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
             let mut particles = Particles::default();
             for x in [0.9, 1.0, 1.1] {
-                let p = Vector::new(x, 0.0625);
+                let p = at(x, 0.0625);
                 particles.push(NewParticle::unstressed(p, Vector::ZERO, 0.01, 1000.0, ()));
             }
             let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
@@ -538,33 +542,37 @@ mod tests {
     /// stencils change nodes on some steps and not on others, and the active set changes on some
     /// of the former, so all three locate paths are taken (asserted); `force_full_locate` makes
     /// every step recompute the stencils and rebuild the active set and its numbering instead.
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding(force_full_locate: bool) -> Vec<u64> {
         sliding_with(force_full_locate, false)
     }
 
     /// `touch`: take `particles_mut()` before every step without changing anything, as scripted
     /// loading does; the stencils computed ahead must then be recomputed, never trusted stale.
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_with(force_full_locate: bool, touch: bool) -> Vec<u64> {
         sliding_on(Bilinear(sliding_grid()), force_full_locate, touch)
     }
 
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_grid() -> RegularGrid {
-        RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [24, 8]).unwrap()
+        grid([0.0; 2], [0.25; 2], [24, 8]).unwrap()
     }
 
     /// `sliding_with` for any shape functions on `sliding_grid`.
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_on<S: ShapeFunctions<N>, const N: usize>(
         shape: S,
         force_full_locate: bool,
         touch: bool,
     ) -> Vec<u64> {
         let mut particles = Particles::default();
-        let block = Shape::Rectangle { min: Vector::new(0.5, 0.0), max: Vector::new(1.5, 1.0) };
+        let block = Shape::Rectangle { min: at(0.5, 0.0), max: at(1.5, 1.0) };
         for (i, s) in fill(&block, 0.125).into_iter().enumerate() {
             // up to ±0.018 m, so that particles of one column cross a cell edge on different steps
             let jitter = 0.003 * ((i * 7919 % 13) as f64 - 6.0);
-            let velocity = Vector::new(4.0, 0.0);
-            let x = s.position + Vector::new(jitter, 0.0);
+            let velocity = at(4.0, 0.0);
+            let x = s.position + at(jitter, 0.0);
             particles.push(NewParticle::unstressed(x, velocity, s.area, 1000.0, ()));
         }
         let config = SolverConfig {
@@ -596,6 +604,7 @@ mod tests {
         s.particles().position.iter().flat_map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
     }
 
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn reusing_an_unchanged_stencil_set_gives_the_same_bits_as_a_full_locate() {
         assert_eq!(sliding(false), sliding(true));
@@ -604,6 +613,7 @@ mod tests {
     /// Regression: after a step whose particles changed nodes, `particles_mut` dropped the
     /// stencils computed ahead but left the stale numbering marked as valid, so the next step
     /// put mass and force on the wrong nodes.
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn taking_the_particles_mutably_between_steps_changes_nothing() {
         assert_eq!(sliding_with(false, true), sliding(false));
@@ -612,6 +622,7 @@ mod tests {
     /// The same for the 3 × 3 stencils, whose first node lies one node below and left of the
     /// point's nearest node: ghost nodes at j = −1 under the floor, and a first node that
     /// changes at the half-cell lines rather than at the cell edges.
+    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn wide_stencils_reuse_what_a_full_locate_would_compute() {
         use mpm_grid::{Gimp, QuadraticBSpline};

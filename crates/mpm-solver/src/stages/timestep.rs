@@ -131,26 +131,27 @@ impl<M: ConstitutiveModel, S: ShapeFunctions<N>, const N: usize> Solver<M, S, N>
     }
 }
 
-#[cfg(all(test, not(feature = "dim3")))]
+#[cfg(test)]
 mod tests {
     use glam::DMat3;
     use mpm_constitutive::LinearElastic;
     use mpm_constitutive::{ConstitutiveError, ConstitutiveModel, SymTensor, UpdateReport};
+    use mpm_grid::testing::{LINEAR, at, grid, volume};
     use mpm_grid::{Bilinear, RegularGrid};
 
     use crate::particles::{NewParticle, Particles};
     use crate::{Scheme, Solver, SolverConfig, SolverError, TimeStep, Vector};
 
     /// Two particles at rest of one material (ρ₀ = 1000 kg/m³, E = 1 MPa) on 0.25 m cells.
-    fn pair() -> Solver<LinearElastic, Bilinear<RegularGrid>, 4> {
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+    fn pair() -> Solver<LinearElastic, Bilinear<RegularGrid>, LINEAR> {
+        let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
         let mut particles = Particles::default();
         for x in [0.6, 1.4] {
-            let position = Vector::new(x, 1.0);
+            let position = at(x, 1.0);
             particles.push(NewParticle::unstressed(
                 position,
                 Vector::ZERO,
-                0.125 * 0.125,
+                volume(0.125),
                 1000.0,
                 (),
             ));
@@ -165,7 +166,7 @@ mod tests {
     }
 
     /// Δt of eq 13 with c = √(M/ρ) and no speed: C·L/c.
-    fn expected_dt(s: &Solver<LinearElastic, Bilinear<RegularGrid>, 4>, density: f64) -> f64 {
+    fn expected_dt(s: &Solver<LinearElastic, Bilinear<RegularGrid>, LINEAR>, density: f64) -> f64 {
         0.5 * 0.25 / (s.materials()[0].p_wave_modulus() / density).sqrt()
     }
 
@@ -214,11 +215,11 @@ mod tests {
     #[test]
     fn the_time_step_follows_a_state_dependent_wave_speed() {
         let elastic = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
-        let grid = RegularGrid::new(Vector::ZERO, Vector::splat(0.25), [8, 8]).unwrap();
+        let grid = grid([0.0; 2], [0.25; 2], [8, 8]).unwrap();
         let mut particles = Particles::default();
         for x in [0.6, 1.4] {
-            let position = Vector::new(x, 1.0);
-            let volume = 0.125 * 0.125;
+            let position = at(x, 1.0);
+            let volume = volume(0.125);
             particles.push(NewParticle::unstressed(position, Vector::ZERO, volume, 1000.0, 0.0));
         }
         let config = SolverConfig {
@@ -279,7 +280,7 @@ mod tests {
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert!((dt / expected_dt(&s, 1250.0) - 1.0).abs() < DT_TOL);
         // and speed still adds to the signal: 10 m/s on one particle.
-        s.particles_mut().velocity[0] = Vector::new(10.0, 0.0);
+        s.particles_mut().velocity[0] = at(10.0, 0.0);
         let c = (s.materials()[0].p_wave_modulus() / 1250.0).sqrt();
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert!((dt / (0.5 * 0.25 / (c + 10.0)) - 1.0).abs() < DT_TOL);
@@ -293,18 +294,18 @@ mod tests {
         s.materials = vec![LinearElastic::from_young_poisson(1e-3, 0.3).unwrap()];
         s.p_modulus = vec![s.materials[0].p_wave_modulus()];
         s.signal_cap = vec![s.p_modulus[0] / 1000.0];
-        s.config.gravity = Vector::new(0.0, -9.81);
+        s.config.gravity = at(0.0, -9.81);
         let (c, l, g): (f64, f64, f64) = (0.5, 0.25, 9.81);
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert!((dt / (2.0 * c * l / g).sqrt() - 1.0).abs() < DT_TOL, "{dt}");
         // moving at 3 m/s: 3 Δt + ½ g Δt² = C L.
-        s.particles_mut().velocity[1] = Vector::new(3.0, 0.0);
+        s.particles_mut().velocity[1] = at(3.0, 0.0);
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert!(((3.0 * dt + 0.5 * g * dt * dt) / (c * l) - 1.0).abs() < DT_TOL, "{dt}");
         // A fixed Δt that lets gravity carry a particle over a cell is refused, naming it:
         // 0.3 s at rest falls 0.44 m, 1.77 cells (its Courant number is 1.4e-3).
         s.particles_mut().velocity[1] = Vector::ZERO;
-        s.particles_mut().velocity[0] = Vector::new(0.0, -1e-3);
+        s.particles_mut().velocity[0] = at(0.0, -1e-3);
         s.config.time_step = TimeStep::Fixed(0.3);
         let e = s.time_step(f64::INFINITY).unwrap_err();
         let expected = (1e-3 * 0.3 + 0.5 * g * 0.09) / l;
@@ -320,7 +321,7 @@ mod tests {
         // E = 1 MPa at rest under gravity: eq 13 (Δt = 3.4e-3 s) binds, not ½ g Δt² = C L
         // (Δt = 0.16 s), so stiff scenes keep their time steps bit for bit.
         let mut s = pair();
-        s.config.gravity = Vector::new(0.0, -9.81);
+        s.config.gravity = at(0.0, -9.81);
         let dt = s.time_step(f64::INFINITY).unwrap().0;
         assert_eq!(dt, 0.5 * 0.25 / (s.materials()[0].p_wave_modulus() / 1000.0).sqrt());
     }
