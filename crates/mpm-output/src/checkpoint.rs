@@ -44,8 +44,9 @@ use crate::csv::{EnergyRow, ProbeRow};
 /// outflow faces, the energy rows its energy, the solver settings the outflow faces, the solver
 /// state its mass scales, the particles their unwrapped offsets across periodic sides, the
 /// history the watch over the grid's undeclared sides, a 3D run's initial centre of mass and the
-/// source's top, the file the scene's folder and the fingerprints of the files it read).
-pub const FORMAT: u32 = 14;
+/// source's top, the file the scene's folder and the fingerprints of the files it read; 15: the
+/// probe rows carry z, as 3D runs have probes).
+pub const FORMAT: u32 = 15;
 
 /// The checkpoint file name inside an output directory.
 pub const FILE_NAME: &str = "checkpoint.bin";

@@ -35,12 +35,12 @@ pub struct ProbeRow {
     pub probe: usize,
     /// particle index.
     pub particle: usize,
-    /// position (m).
-    pub position: [f64; 2],
+    /// position (m; z is 0 in a plane-strain run).
+    pub position: [f64; 3],
     /// displacement from the initial position (m).
-    pub displacement: [f64; 2],
+    pub displacement: [f64; 3],
     /// velocity (m/s).
-    pub velocity: [f64; 2],
+    pub velocity: [f64; 3],
     /// displacement along the reference direction (x without a reference).
     pub along: f64,
     /// the analytic displacement along the same direction, when the scene declares one.
@@ -78,6 +78,10 @@ pub const ENERGY_HEADER: &str = "time,step,dt,kinetic,strain,potential,plastic_d
 /// header line of `probes.csv`.
 pub const PROBES_HEADER: &str =
     "time,probe,particle,x,y,ux,uy,vx,vy,displacement_along,reference_along\n";
+
+/// header line of a 3D run's `probes.csv` (no analytic reference in 3D).
+pub const PROBES_HEADER_3D: &str =
+    "time,probe,particle,x,y,z,ux,uy,uz,vx,vy,vz,displacement_along\n";
 
 /// header line of `runout.csv`.
 pub const RUNOUT_HEADER: &str =
@@ -132,6 +136,20 @@ pub fn probes(s: &mut String, rows: &[ProbeRow]) {
             let _ = write!(s, "{v}");
         }
         s.push('\n');
+    }
+}
+
+/// appends the lines of a 3D run's `rows` to `s` ([`PROBES_HEADER_3D`]).
+pub fn probes_3d(s: &mut String, rows: &[ProbeRow]) {
+    for r in rows {
+        let [x, y, z] = r.position;
+        let [ux, uy, uz] = r.displacement;
+        let [vx, vy, vz] = r.velocity;
+        let _ = writeln!(
+            s,
+            "{},{},{},{x},{y},{z},{ux},{uy},{uz},{vx},{vy},{vz},{}",
+            r.time, r.probe, r.particle, r.along
+        );
     }
 }
 

@@ -370,9 +370,9 @@ impl Driver<'_> {
                 time: t,
                 probe: k,
                 particle: i,
-                position: [x.x, x.y],
-                displacement: [u.x, u.y],
-                velocity: [v.x, v.y],
+                position: [x.x, x.y, 0.0],
+                displacement: [u.x, u.y, 0.0],
+                velocity: [v.x, v.y, 0.0],
                 along: u.dot(direction),
                 reference: r.output.reference.map(|rf| rf.displacement(t)),
             });

@@ -9,7 +9,8 @@
 //! the centre of mass's travel is its 3D distance. Checkpoints (every
 //! `output.checkpoint_interval` and on an interrupt) are the 2D runs' files, whose state is a 3D
 //! variant of [`SavedState`]; `mpm resume` continues them bit-identically ([`crate::resume()`]
-//! routes a 3D scene here). Not yet in 3D: probes and envelopes. The plots
+//! routes a 3D scene here). Probes write `probes.csv` with three components; not yet in 3D:
+//! envelopes along a section and the analytic reference curves. The plots
 //! are the energy, the runout and the deposit in plan; `hazard_maps` adds the maps of `maps/`.
 //! The 3D worker of [`crate::Simulation`] (`simulation/space.rs`) records through this driver.
 
@@ -22,7 +23,7 @@ use std::time::Instant;
 use glam::DVec2;
 use mpm_grid3d::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History, state_hash};
-use mpm_output::csv::{self, EnergyRow};
+use mpm_output::csv::{self, EnergyRow, ProbeRow};
 use mpm_output::dir::prepare_dir;
 use mpm_output::loads::{self, LoadSample, WallSeries};
 use mpm_output::{OutputError, atomic, maps, report, vtk};
@@ -180,8 +181,14 @@ pub(crate) fn resume_space(
     if c.state.dimension() != 3 {
         return Err(refuse("its scene is a 3D scene but its state is a 2D run's".into()));
     }
-    crate::common::fits(&c, scene.end_time, scene.max_steps, scene.seeds.len(), 0)
-        .map_err(refuse)?;
+    crate::common::fits(
+        &c,
+        scene.end_time,
+        scene.max_steps,
+        scene.seeds.len(),
+        scene.output.probes.len(),
+    )
+    .map_err(refuse)?;
     let resume = Some((c.state, c.history));
     with_pool(opts, scene.seeds.len(), |threads| {
         let run = SpaceRun { opts, threads, resume, dir: Some(dir.to_path_buf()) };
@@ -311,8 +318,10 @@ pub(crate) struct SpaceDriver<'a> {
     crown: mpm_solver3d::Vector,
     energy: Vec<EnergyRow>,
     runout: Vec<RunoutMetrics>,
+    /// the rows of `probes.csv` (a scene with `output.probes`).
+    probes: Vec<ProbeRow>,
     frames: Vec<(f64, String)>,
-    flushed: [usize; 3],
+    flushed: [usize; 4],
     check: EnergyCheck,
     alarm_time: Option<f64>,
     rest_peak: f64,

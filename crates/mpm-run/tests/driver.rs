@@ -265,6 +265,7 @@ end_time = 0.12
 interval = 0.03
 checkpoint_interval = 0.05
 hazard_maps = true
+probes = [{ nearest = [0.5, 0.1, 0.3] }, 7]
 "#;
 
 /// A 3D run stopped part-way writes a checkpoint, and `resume` continues it to the bits of the
@@ -303,6 +304,10 @@ fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
     assert_eq!(energy(&part_dir), energy(&whole_dir), "energy.csv as in one go");
     let runout = |d: &std::path::Path| std::fs::read_to_string(d.join("runout.csv")).unwrap();
     assert_eq!(runout(&part_dir), runout(&whole_dir), "runout.csv as in one go");
+    let probes = |d: &std::path::Path| std::fs::read_to_string(d.join("probes.csv")).unwrap();
+    assert_eq!(probes(&part_dir), probes(&whole_dir), "probes.csv as in one go");
+    let series_rows = energy(&whole_dir).lines().count() - 1;
+    assert_eq!(probes(&whole_dir).lines().count(), 1 + 2 * series_rows, "2 probes a series row");
     assert_eq!(resumed.hazard_maps, whole.hazard_maps);
     for map in ["max_height", "max_pressure", "arrival_time", "deposit_depth"] {
         let read = |d: &std::path::Path| std::fs::read(d.join(format!("maps/{map}.tif"))).unwrap();
@@ -780,4 +785,90 @@ fn a_thread_count_of_zero_and_a_time_already_passed_are_refused() {
     // the time it is at is admissible: nothing to do
     sim.advance(Limit::Time(now), &mut || false).unwrap();
     assert_eq!(sim.steps(), 3);
+}
+
+/// A 3D probe follows its particle: a box thrown at (1, 0, 0.5) m/s in free flight moves as one
+/// body, so the particle nearest the probe's point (found here from the scene's seeds) has at
+/// every series row the velocity (1, −g t, 0.5) and the horizontal displacement (t, 0.5 t) of
+/// the closed form, to the rounding of the steps' sums (1e-9); its fall is the explicit
+/// update's, Σ v_k Δt_k with v_k = −g t_k at the end of step k, which lies between −½ g t² and
+/// −½ g t² − ½ g t Δt_max (a right Riemann sum of ∫ g t dt). A 3D probe point of two
+/// coordinates is refused naming the field.
+#[test]
+fn a_3d_probe_follows_its_particle_in_free_flight() {
+    let text = r#"
+[grid]
+dimension = 3
+kind = "regular"
+origin = [0.0, 0.0, 0.0]
+cell = [0.1, 0.1, 0.1]
+cells = [12, 20, 8]
+[materials.block]
+kind = "elastic"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+[[bodies]]
+material = "block"
+shape = "box"
+min = [0.2, 1.5, 0.2]
+max = [0.4, 1.7, 0.4]
+velocity = [1.0, 0.0, 0.5]
+[solver]
+end_time = 0.3
+[output]
+interval = 0.3
+series_interval = 0.05
+vtk = false
+plots = false
+probes = [{ nearest = [0.33, 1.62, 0.27] }]
+"#;
+    let scene = mpm_scene::load_space_str(text, "thrown3d").unwrap();
+    let target = mpm_solver3d::Vector::new(0.33, 1.62, 0.27);
+    let nearest = (0..scene.seeds.len())
+        .min_by(|&a, &b| {
+            let d = |i: usize| scene.seeds[i].position.distance_squared(target);
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap();
+    let dir = std::env::temp_dir().join(format!("mpm-probe3d-{}", std::process::id()));
+    let s = mpm_run::run_space_scene(
+        &scene,
+        &RunOptions { out_dir: Some(dir.clone()), ..Default::default() },
+    )
+    .unwrap();
+    assert_eq!(s.status, mpm_scene::RunStatus::Completed);
+    let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next().unwrap(), mpm_output::csv::PROBES_HEADER_3D.trim_end());
+    let g = 9.81;
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let t = v[0];
+        assert_eq!(v[2] as usize, nearest, "the particle nearest the point");
+        let expected = [t, 0.5 * t, 1.0, -g * t, 0.5];
+        for (got, want) in [v[6], v[8], v[9], v[10], v[11]].into_iter().zip(expected) {
+            assert!((got - want).abs() < 1e-9, "t = {t}: {got} against {want} in {line}");
+        }
+        let (fall, closed) = (-v[7], 0.5 * g * t * t);
+        assert!(
+            fall >= closed - 1e-12 && fall <= closed + 0.5 * g * t * s.dt.max + 1e-12,
+            "{line}"
+        );
+        rows += 1;
+    }
+    assert_eq!(rows, 7, "t = 0, 0.05, …, 0.3");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    let flat = text.replace("nearest = [0.33, 1.62, 0.27]", "nearest = [0.33, 1.62]");
+    let e = mpm_scene::load_space_str(&flat, "flat").unwrap_err();
+    assert_eq!(e.path, "output.probes[0].nearest", "{e}");
+    assert!(e.problem.contains("2 coordinates in a 3D scene"), "{e}");
+    let flume = mpm_run::embedded_scene("flume").unwrap();
+    let deep = flume.replace("nearest = [0.745, 1.42]", "nearest = [0.745, 1.42, 0.0]");
+    assert_ne!(deep, flume);
+    let e = load_scene_str(&deep, "flume").unwrap_err();
+    assert_eq!(e.path, "output.probes[0].nearest", "{e}");
+    assert!(e.problem.contains("3 coordinates in a 2D scene"), "{e}");
 }

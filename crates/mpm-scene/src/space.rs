@@ -161,6 +161,9 @@ pub struct SpaceOutput {
     /// the coordinate reference system of a terrain grid's DEM, which the maps are written
     /// with (none on a regular grid, or when the DEM's file states none).
     pub crs: mpm_dem::Crs,
+    /// the probed particles (`output.probes`, resolved to indices), whose position,
+    /// displacement and velocity `probes.csv` records at every series interval.
+    pub probes: Vec<usize>,
 }
 
 /// One 3D material point before the constitutive state is attached.

@@ -89,8 +89,9 @@ impl<'a> SpaceDriver<'a> {
             crown,
             energy: Vec::new(),
             runout: Vec::new(),
+            probes: Vec::new(),
             frames: Vec::new(),
-            flushed: [0; 3],
+            flushed: [0; 4],
             walls: None,
             edges: edge_watch(scene),
             check,
@@ -106,6 +107,7 @@ impl<'a> SpaceDriver<'a> {
         if let Some(h) = history {
             d.energy = h.energy;
             d.runout = h.runout;
+            d.probes = h.probes;
             d.frames = h.frames;
             (d.frame_slot, d.series_slot, d.checkpoint_slot) =
                 (h.frame_slot, h.series_slot, h.checkpoint_slot);
@@ -143,7 +145,7 @@ impl<'a> SpaceDriver<'a> {
         let c = &self.check;
         History {
             energy: self.energy.clone(),
-            probes: Vec::new(),
+            probes: self.probes.clone(),
             runout: self.runout.clone(),
             frames: self.frames.clone(),
             frame_slot: self.frame_slot,
@@ -199,7 +201,7 @@ impl<'a> SpaceDriver<'a> {
     /// rewrites the series and the frame collection from the history (a resumed run's).
     pub(super) fn rewrite_outputs(&mut self) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
-        self.flushed = [0; 3];
+        self.flushed = [0; 4];
         self.flush()?;
         if self.scene.output.vtk {
             atomic::write(&dir.join("particles.pvd"), vtk::pvd(&self.frames).as_bytes())?;
@@ -317,6 +319,21 @@ impl<'a> SpaceDriver<'a> {
         });
         let m = self.metrics(solver);
         self.runout.push(m);
+        let p = solver.particles();
+        for (k, &i) in self.scene.output.probes.iter().enumerate() {
+            let Some(&x) = p.position.get(i) else { continue };
+            let u = x - p.initial_position[i];
+            self.probes.push(ProbeRow {
+                time: t,
+                probe: k,
+                particle: i,
+                position: x.to_array(),
+                displacement: u.to_array(),
+                velocity: p.velocity[i].to_array(),
+                along: u.dot(self.scene.runout_direction),
+                reference: None,
+            });
+        }
         if let Some(w) = &mut self.edges {
             let (scene, p) = (self.scene, solver.particles());
             let grains: Vec<Grain> = flowing(scene, p)
@@ -374,9 +391,13 @@ impl<'a> SpaceDriver<'a> {
     pub(super) fn flush(&mut self) -> Result<(), RunError> {
         let Some(dir) = self.dir else { return Ok(()) };
         let clock = Instant::now();
-        let [e, r, w] = &mut self.flushed;
+        let [e, r, w, p] = &mut self.flushed;
         csv::flush(&dir.join("energy.csv"), csv::ENERGY_HEADER, &self.energy, e, csv::energy)?;
         csv::flush(&dir.join("runout.csv"), csv::RUNOUT_HEADER, &self.runout, r, csv::runout)?;
+        if !self.scene.output.probes.is_empty() {
+            let header = csv::PROBES_HEADER_3D;
+            csv::flush(&dir.join("probes.csv"), header, &self.probes, p, csv::probes_3d)?;
+        }
         if let Some(s) = &self.walls {
             csv::flush(&dir.join("walls.csv"), &s.header(), &s.rows, w, loads::lines)?;
         }

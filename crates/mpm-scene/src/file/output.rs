@@ -103,12 +103,12 @@ impl VtkFormat {
 }
 
 /// A probe: a particle index, or the particle nearest to a point at t = 0.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ProbeSpec {
     /// particle index (generation order: bodies in file order, each row by row).
     Index(i64),
-    /// the particle nearest to `[x, y]` at t = 0.
-    Nearest([f64; 2]),
+    /// the particle nearest to `[x, y]` (`[x, y, z]` in a 3D scene) at t = 0.
+    Nearest(Vec<f64>),
 }
 
 impl<'de> Deserialize<'de> for ProbeSpec {
@@ -117,7 +117,7 @@ impl<'de> Deserialize<'de> for ProbeSpec {
         impl<'de> Visitor<'de> for V {
             type Value = ProbeSpec;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a particle index or { nearest = [x, y] }")
+                f.write_str("a particle index or { nearest = [x, y] } ([x, y, z] in 3D)")
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<ProbeSpec, E> {
                 Ok(ProbeSpec::Index(v))
@@ -131,7 +131,14 @@ impl<'de> Deserialize<'de> for ProbeSpec {
                     if key != "nearest" {
                         return Err(de::Error::unknown_field(&key, &["nearest"]));
                     }
-                    out = Some(ProbeSpec::Nearest(map.next_value::<exact::Two<f64>>()?.0));
+                    let point: Vec<f64> = map.next_value()?;
+                    if !(2..=3).contains(&point.len()) {
+                        return Err(de::Error::custom(format!(
+                            "expected 2 values [x, y] (3 in a 3D scene), found {}",
+                            point.len()
+                        )));
+                    }
+                    out = Some(ProbeSpec::Nearest(point));
                 }
                 out.ok_or_else(|| de::Error::missing_field("nearest"))
             }

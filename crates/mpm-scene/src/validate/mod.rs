@@ -366,17 +366,7 @@ fn resolve(ctx: &Ctx<'_>, f: &SceneFile) -> Result<Resolved, SceneError> {
         &config.boundaries,
         config.gravity,
     )?;
-    if config.outflow.any() && !output.probes.is_empty() {
-        // a probe names a particle by its place in the arrays, which changes when one leaves
-        return Err(ctx.err(
-            "output.probes",
-            None,
-            "probes cannot follow particles beside outflow faces yet (a probe is a particle's \
-             place in the run, which changes when particles leave)",
-            "probes, or outflow faces",
-            "remove the probes, or give the outflow faces a friction law",
-        ));
-    }
+    output::no_probes_beside_outflow(ctx, config.outflow.any(), &output.probes)?;
     let warnings = plausible::warnings(ctx, f, config.gravity.length())?;
     Ok(Resolved {
         grid,

@@ -81,16 +81,10 @@ pub(super) fn build(
             ));
         }
     }
-    if let Some(list) = o.probes.as_ref().filter(|l| l.len() > MAX_PROBES) {
-        return Err(ctx.err(
-            "output.probes",
-            Some(format!("{} probes", list.len())),
-            "too many probes",
-            format!("at most {MAX_PROBES} probes (each writes a row per series interval)"),
-            "probe a few particles; the particle frames hold every particle",
-        ));
-    }
-    let probes = probes(ctx, o, seeds)?;
+    let probes = probes(ctx, o, seeds.len(), 2, |at| {
+        let at = Vector::new(at[0], at[1]);
+        nearest(seeds.iter().map(|s| s.position.distance_squared(at)))
+    })?;
     let reference = match o.reference {
         None => None,
         Some(curve) => Some(reference(ctx, curve, &probes, seeds, grid, boundaries, gravity)?),
@@ -185,49 +179,90 @@ fn observed(
     Ok(ObservedDeposit { file: spec.deposit.clone(), points })
 }
 
-/// The probed particles' indices.
-fn probes(ctx: &Ctx<'_>, o: &OutputSpec, seeds: &[Seed]) -> Result<Vec<usize>, SceneError> {
+/// The probed particles' indices in a scene of `count` particles and `dim` dimensions, a point's
+/// nearest particle found by `nearest` (given the point's `dim` finite coordinates).
+pub(super) fn probes(
+    ctx: &Ctx<'_>,
+    o: &OutputSpec,
+    count: usize,
+    dim: usize,
+    nearest: impl Fn(&[f64]) -> usize,
+) -> Result<Vec<usize>, SceneError> {
+    if let Some(list) = o.probes.as_ref().filter(|l| l.len() > MAX_PROBES) {
+        return Err(ctx.err(
+            "output.probes",
+            Some(format!("{} probes", list.len())),
+            "too many probes",
+            format!("at most {MAX_PROBES} probes (each writes a row per series interval)"),
+            "probe a few particles; the particle frames hold every particle",
+        ));
+    }
+    let point = if dim == 3 { "[x, y, z]" } else { "[x, y]" };
     let mut probes = Vec::new();
     for (k, probe) in o.probes.iter().flatten().enumerate() {
         let path = format!("output.probes[{k}]");
-        match *probe {
-            ProbeSpec::Index(i) => {
-                if !(i >= 0 && (i as usize) < seeds.len()) {
+        match probe {
+            &ProbeSpec::Index(i) => {
+                if !(i >= 0 && (i as usize) < count) {
                     return Err(ctx.err(
                         &path,
                         Some(i.to_string()),
                         "no particle has this index",
-                        format!("0 ≤ index < {} (the scene's particle count)", seeds.len()),
-                        "use a smaller index, or { nearest = [x, y] }",
+                        format!("0 ≤ index < {count} (the scene's particle count)"),
+                        format!("use a smaller index, or {{ nearest = {point} }}"),
                     ));
                 }
                 probes.push(i as usize);
             }
+            ProbeSpec::Nearest(at) if at.len() != dim => {
+                return Err(ctx.err(
+                    &format!("{path}.nearest"),
+                    Some(format!("{at:?}")),
+                    format!("{} coordinates in a {dim}D scene", at.len()),
+                    format!("the point {point} (m)"),
+                    format!("give {dim} coordinates"),
+                ));
+            }
             ProbeSpec::Nearest(at) => {
-                if !(at[0].is_finite() && at[1].is_finite()) {
+                if !at.iter().all(|c| c.is_finite()) {
                     return Err(ctx.err(
                         &path,
-                        Some(pair(at)),
+                        Some(if dim == 3 { format!("{at:?}") } else { pair([at[0], at[1]]) }),
                         "the point is not finite",
                         "finite coordinates (m)",
                         "give a point inside a body",
                     ));
                 }
-                let at = Vector::new(at[0], at[1]);
-                let nearest = seeds
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| {
-                        a.1.position
-                            .distance_squared(at)
-                            .total_cmp(&b.1.position.distance_squared(at))
-                    })
-                    .map_or(0, |(i, _)| i);
-                probes.push(nearest);
+                probes.push(nearest(at));
             }
         }
     }
     Ok(probes)
+}
+
+/// refuses probes in a run with outflow faces: a probe names a particle by its place in the
+/// arrays, which changes when one leaves (2D and 3D alike).
+pub(super) fn no_probes_beside_outflow(
+    ctx: &Ctx<'_>,
+    outflow: bool,
+    probes: &[usize],
+) -> Result<(), SceneError> {
+    if outflow && !probes.is_empty() {
+        return Err(ctx.err(
+            "output.probes",
+            None,
+            "probes cannot follow particles beside outflow faces yet (a probe is a particle's \
+             place in the run, which changes when particles leave)",
+            "probes, or outflow faces",
+            "remove the probes, or give the outflow faces a friction law",
+        ));
+    }
+    Ok(())
+}
+
+/// the index of the least of `distances` (the first on a tie; 0 for none).
+pub(super) fn nearest(distances: impl Iterator<Item = f64>) -> usize {
+    distances.enumerate().min_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |(i, _)| i)
 }
 
 /// The rigid block (eqs 21–22) the first probe is compared with, its friction from the ground.

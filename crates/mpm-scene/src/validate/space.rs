@@ -145,7 +145,8 @@ fn resolve(ctx: &Ctx<'_>, f: SpaceFile, text: &str) -> Result<SpaceScene, SceneE
         }
     }
     let initial_dt = first_dt(ctx, &f, &config, &grid, &materials, &seeds, settings.max_steps)?;
-    let output = SpaceOutput { crs, ..output(ctx, &f, &grid)? };
+    let output = SpaceOutput { crs, ..output(ctx, &f, &grid, &seeds)? };
+    super::output::no_probes_beside_outflow(ctx, config.outflow.any(), &output.probes)?;
     let warnings = plausible::space_warnings(ctx, &f, gravity.length())?;
     let runout_direction = runout_direction(ctx, &f, gravity)?;
     Ok(SpaceScene {
@@ -482,10 +483,14 @@ fn first_dt(
 }
 
 /// `[output]` of a 3D scene: frames and series; the 2D-only outputs are refused.
-fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput, SceneError> {
+fn output(
+    ctx: &Ctx<'_>,
+    f: &SpaceFile,
+    grid: &SpaceGrid,
+    seeds: &[SpaceSeed],
+) -> Result<SpaceOutput, SceneError> {
     let o = &f.output;
     let refused = [
-        ("output.probes", o.probes.is_some()),
         ("output.reference", o.reference.is_some()),
         ("output.envelope", o.envelope == Some(true)),
     ];
@@ -495,9 +500,9 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             None,
             "this output is not available in 3D scenes yet",
             "interval, series_interval, exact_times, checkpoint_interval, fields, vtk, \
-             vtk_format, plots, runout_direction, hazard_maps, observed",
-            "remove it (3D runs write frames, energy.csv, runout.csv, checkpoints and \
-             summary.json)",
+             vtk_format, plots, probes, runout_direction, hazard_maps, observed",
+            "remove it (3D runs write frames, energy.csv, runout.csv, probes.csv, checkpoints \
+             and summary.json)",
         ));
     }
     if let Some(c) = o.checkpoint_interval {
@@ -586,8 +591,13 @@ fn output(ctx: &Ctx<'_>, f: &SpaceFile, grid: &SpaceGrid) -> Result<SpaceOutput,
             Some((spec.deposit.clone(), raster))
         }
     };
+    let probes = super::output::probes(ctx, o, seeds.len(), 3, |at| {
+        let at = Vector::new(at[0], at[1], at[2]);
+        super::output::nearest(seeds.iter().map(|s| s.position.distance_squared(at)))
+    })?;
     Ok(SpaceOutput {
         observed,
+        probes,
         interval,
         series_interval,
         exact_times: o.exact_times.unwrap_or(false),
