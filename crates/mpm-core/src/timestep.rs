@@ -6,7 +6,8 @@ use crate::settings::{MAX_COURANT, Real, TimeStep};
 
 /// The largest Δt for which a particle at speed `v` under gravity `g` moves at most `d`:
 /// the root of v Δt + ½ g Δt² = d (+∞ when nothing moves). The time step's second bound
-/// (module docs), exported so that a front end can predict the first Δt.
+/// (no particle moves more than C·L in a step: the solver's time-step stage explains why),
+/// exported so that a front end can predict the first Δt.
 pub fn displacement_dt(d: Real, v: Real, g: Real) -> Real {
     // 2d / (v + √(v² + 2gd)): the rationalised root, exact also for g = 0 (d/v).
     2.0 * d / (v + (v * v + 2.0 * g * d).sqrt())

@@ -41,7 +41,8 @@ pub struct ProbeRow {
     pub displacement: [f64; 3],
     /// velocity (m/s).
     pub velocity: [f64; 3],
-    /// displacement along the reference direction (x without a reference).
+    /// displacement along the reference direction (x without a reference; in 3D along the
+    /// scene's `runout_direction`).
     pub along: f64,
     /// the analytic displacement along the same direction, when the scene declares one.
     pub reference: Option<f64>,

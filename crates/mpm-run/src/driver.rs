@@ -363,7 +363,11 @@ impl Driver<'_> {
         let p = solver.particles();
         let direction = r.output.reference.map_or(Vector::X, |rf| rf.direction);
         for (k, &i) in r.output.probes.iter().enumerate() {
-            let Some(&x) = p.position.get(i) else { continue };
+            if i >= p.len() {
+                continue;
+            }
+            // (unwrapped across a periodic pair: the probe follows its particle, not its image)
+            let x = p.unwrapped_position(i);
             let u = x - p.initial_position[i];
             let v = p.velocity[i];
             self.history.probes.push(ProbeRow {

@@ -851,6 +851,7 @@ probes = [{ nearest = [0.33, 1.62, 0.27] }]
         for (got, want) in [v[6], v[8], v[9], v[10], v[11]].into_iter().zip(expected) {
             assert!((got - want).abs() < 1e-9, "t = {t}: {got} against {want} in {line}");
         }
+        // (1e-12 m: the rounding of the sums, as above but on a fall of at most 0.45 m)
         let (fall, closed) = (-v[7], 0.5 * g * t * t);
         assert!(
             fall >= closed - 1e-12 && fall <= closed + 0.5 * g * t * s.dt.max + 1e-12,
@@ -865,6 +866,14 @@ probes = [{ nearest = [0.33, 1.62, 0.27] }]
     let e = mpm_scene::load_space_str(&flat, "flat").unwrap_err();
     assert_eq!(e.path, "output.probes[0].nearest", "{e}");
     assert!(e.problem.contains("2 coordinates in a 3D scene"), "{e}");
+    let beyond = text.replace("{ nearest = [0.33, 1.62, 0.27] }", "64");
+    let e = mpm_scene::load_space_str(&beyond, "beyond").unwrap_err();
+    assert_eq!((e.path.as_str(), e.value.as_deref()), ("output.probes[0]", Some("64")), "{e}");
+    assert!(e.admissible.contains("0 ≤ index < 64"), "2 cells a side at 2 per cell: 4³: {e}");
+    let leaving = text.replace("[solver]", "[boundaries]\nright_wall = \"outflow\"\n[solver]");
+    let e = mpm_scene::load_space_str(&leaving, "leaving").unwrap_err();
+    assert_eq!(e.path, "output.probes", "{e}");
+    assert!(e.problem.contains("outflow"), "{e}");
     let flume = mpm_run::embedded_scene("flume").unwrap();
     let deep = flume.replace("nearest = [0.745, 1.42]", "nearest = [0.745, 1.42, 0.0]");
     assert_ne!(deep, flume);

@@ -784,7 +784,7 @@ mod tests {
             let mut particles = Particles::default();
             for k in 0..24 {
                 let x = at(1.025 + 0.05 * (k % 8) as f64, 0.025 + 0.05 * (k / 8) as f64);
-                let mut p = NewParticle::unstressed(x, at(3.0, 0.0), 0.0025, 1000.0, ());
+                let mut p = NewParticle::unstressed(x, at(3.0, 0.0), volume(0.05), 1000.0, ());
                 p.stress.yy = -1000.0 * 9.81 * (0.15 - x.y);
                 particles.push(p);
             }
@@ -863,7 +863,7 @@ mod tests {
             let mut particles = Particles::default();
             for k in 0..16 {
                 let x = at(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
-                let mut p = NewParticle::unstressed(x, at(0.2, -0.5), 0.015625, 1000.0, ());
+                let mut p = NewParticle::unstressed(x, at(0.2, -0.5), volume(0.125), 1000.0, ());
                 p.stress.yy = -1e3 * x.y;
                 particles.push(p);
             }
@@ -899,7 +899,7 @@ mod tests {
         let mut particles = Particles::default();
         for k in 0..3 {
             let x = at(1.0 + 0.1 * k as f64, 1.0);
-            particles.push(NewParticle::unstressed(x, Vector::ZERO, 0.01, 1000.0, ()));
+            particles.push(NewParticle::unstressed(x, Vector::ZERO, volume(0.1), 1000.0, ()));
         }
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
         let config = SolverConfig::default();
@@ -921,7 +921,7 @@ mod tests {
         let mut particles = Particles::default();
         for k in 0..16 {
             let x = at(0.56 + 0.125 * (k % 4) as f64, 0.31 + 0.125 * (k / 4) as f64);
-            let mut p = NewParticle::unstressed(x, at(0.2, -0.5), 0.015625, 1000.0, ());
+            let mut p = NewParticle::unstressed(x, at(0.2, -0.5), volume(0.125), 1000.0, ());
             p.stress.yy = -1e3 * x.y;
             particles.push(p);
         }
@@ -952,7 +952,7 @@ mod tests {
         let up = vec![at(0.0, 1.0); 16];
         s.set_velocities(&up).unwrap();
         let after = s.energy();
-        assert!((after.kinetic - 0.5 * 16.0 * 0.015625 * 1000.0).abs() < 1e-12, "{after:?}");
+        assert!((after.kinetic - 0.5 * 16.0 * volume(0.125) * 1000.0).abs() < 1e-12, "{after:?}");
         assert!((after.residual - before.residual).abs() < 1e-12 * after.kinetic, "{after:?}");
         s.step().unwrap();
         assert!(s.particles().position[0].y > y0, "the block moves up");

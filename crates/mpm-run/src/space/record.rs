@@ -321,7 +321,11 @@ impl<'a> SpaceDriver<'a> {
         self.runout.push(m);
         let p = solver.particles();
         for (k, &i) in self.scene.output.probes.iter().enumerate() {
-            let Some(&x) = p.position.get(i) else { continue };
+            if i >= p.len() {
+                continue;
+            }
+            // (unwrapped across a periodic pair: the probe follows its particle, not its image)
+            let x = p.unwrapped_position(i);
             let u = x - p.initial_position[i];
             self.probes.push(ProbeRow {
                 time: t,

@@ -7,8 +7,6 @@ use glam::DVec2;
 use mpm_contact3d::{Friction, Wall};
 use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid, TerrainGrid, TerrainGridSpec};
 use mpm_solver3d::generate::{self, Shape};
-// the 3D build's own copies of the dimension-free settings (the scene file's are the 2D
-// build's), converted below
 use mpm_solver3d::{Boundaries, Outflow, Periodic, SolverConfig, TimeStep, Transfer, Vector};
 
 use super::{Ctx, bodies, boundaries, finite_pos, materials, num, plausible, serde_error, solver};

@@ -285,7 +285,7 @@ mod tests {
         let mut particles = Particles::default();
         for v in [at(0.3, -0.2), at(-0.3, 0.2)] {
             let x = at(2.1, 1.7);
-            particles.push(NewParticle::unstressed(x, v, 0.0625, 1000.0, ()));
+            particles.push(NewParticle::unstressed(x, v, volume(0.25), 1000.0, ()));
         }
         let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
         let mut s = Solver::new(Bilinear(grid), vec![material], particles, config).unwrap();

@@ -489,7 +489,7 @@ mod tests {
     use mpm_constitutive::LinearElastic;
     use mpm_contact::Friction;
     use mpm_grid::Bilinear;
-    use mpm_grid::testing::{at, grid};
+    use mpm_grid::testing::{at, grid, volume};
     #[cfg(not(feature = "dim3"))]
     use mpm_grid::{ActiveNodes, RegularGrid, ShapeFunctions};
 
@@ -510,7 +510,7 @@ mod tests {
             let mut particles = Particles::default();
             for x in [0.9, 1.0, 1.1] {
                 let p = at(x, 0.0625);
-                particles.push(NewParticle::unstressed(p, Vector::ZERO, 0.01, 1000.0, ()));
+                particles.push(NewParticle::unstressed(p, Vector::ZERO, volume(0.1), 1000.0, ()));
             }
             let material = LinearElastic::from_young_poisson(1e6, 0.3).unwrap();
             let config = SolverConfig {
