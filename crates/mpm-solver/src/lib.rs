@@ -67,6 +67,8 @@ mod setup;
 mod signal;
 pub mod solver;
 mod stages;
+#[cfg(test)]
+mod testing;
 
 pub use config::{
     BadTimeStep, Boundaries, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT,

@@ -2,8 +2,8 @@
 
 use mpm_contact::Wall;
 use mpm_solver::{
-    BadTimeStep, Boundaries, Periodic, PicWeighting, Scheme, SolverConfig, SolverError, StepLimit,
-    TimeStep, Vector, stable_dt,
+    BadTimeStep, Boundaries, Contact, MassMatrix, Periodic, PicWeighting, Scheme, SolverConfig,
+    SolverError, StepLimit, TimeStep, Transfer, Vector, stable_dt,
 };
 use mpm_solver::{DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT};
 
@@ -192,8 +192,7 @@ fn gravity(ctx: &Ctx<'_>, s: &SolverSpec, dim: usize) -> Result<[f64; 3], SceneE
     }
 }
 
-/// The solver configuration of a scene; where the scene is silent, its materials' model decides
-/// whether the stress rate is objective and the PIC share of a FLIP transfer.
+/// The 2D solver configuration of a scene: its settings, boundaries and [`choices`].
 pub(super) fn config(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
@@ -207,13 +206,7 @@ pub(super) fn config(
     ),
     materials: &MaterialsBuilt,
 ) -> Result<SolverConfig, SceneError> {
-    let transfer = s.transfer.unwrap_or_default();
-    // Under APIC neither default applies: APIC damps the grid-invisible noise itself, and a
-    // stress-free grain keeps its affine stretching for ever, so separated grains would expand
-    // without bound (a = 1 column collapse: thrown to 1.5 × the column's height, measured).
-    let flip = transfer == mpm_solver::Transfer::Flip;
-    let (pic_fraction, pic_relaxation, pic_weighting) = pic_share(ctx, s, flip, materials)?;
-    let separation_default = if flip { materials.separation_density() } else { 0.0 };
+    let c = choices(ctx, s, materials)?;
     let config = SolverConfig {
         scheme: settings.scheme,
         time_step: settings.time_step,
@@ -224,25 +217,66 @@ pub(super) fn config(
         walls,
         side_walls,
         small_mass_ratio: settings.small_mass_ratio,
-        objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
+        objective_stress: c.objective_stress,
         gravity_ramp: settings.gravity_ramp,
+        transfer: c.transfer,
+        pic_fraction: c.pic_fraction,
+        pic_relaxation: c.pic_relaxation,
+        pic_weighting: c.pic_weighting,
+        separation_density: c.separation_density,
+        contact: c.contact,
+        mass: c.mass,
+    };
+    config.validate().map_err(|e| solver_error(ctx, e))?;
+    Ok(config)
+}
+
+/// What a scene chooses of the solver's settings that do not depend on dimension, where it is
+/// silent its materials' defaults ([`choices`]).
+pub(super) struct Choices {
+    pub transfer: Transfer,
+    pub pic_fraction: f64,
+    pub pic_relaxation: f64,
+    pub pic_weighting: PicWeighting,
+    pub separation_density: f64,
+    pub objective_stress: bool,
+    pub contact: Contact,
+    pub mass: MassMatrix,
+}
+
+/// The transfer, its PIC share, the separation density, the stress rate, the contact rule and
+/// the mass matrix of a scene (2D or 3D); where it is silent, its materials' model decides
+/// whether the stress rate is objective and, under FLIP, the PIC share and the separation
+/// density.
+pub(super) fn choices(
+    ctx: &Ctx<'_>,
+    s: &SolverSpec,
+    materials: &MaterialsBuilt,
+) -> Result<Choices, SceneError> {
+    let transfer = s.transfer.unwrap_or_default();
+    // Under APIC neither default applies: APIC damps the grid-invisible noise itself, and a
+    // stress-free grain keeps its affine stretching for ever, so separated grains would expand
+    // without bound (a = 1 column collapse: thrown to 1.5 × the column's height, measured).
+    let flip = transfer == Transfer::Flip;
+    let (pic_fraction, pic_relaxation, pic_weighting) = pic_share(ctx, s, flip, materials)?;
+    let separation_default = if flip { materials.separation_density() } else { 0.0 };
+    Ok(Choices {
         transfer,
         pic_fraction,
         pic_relaxation,
         pic_weighting,
         separation_density: s.separation_density.unwrap_or(separation_default),
+        objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
         contact: s.contact.unwrap_or_default(),
         mass: s.mass.unwrap_or_default(),
-    };
-    config.validate().map_err(|e| solver_error(ctx, e))?;
-    Ok(config)
+    })
 }
 
 /// The PIC share of a scene's transfer as (per step, relaxation time τ in s, weighting), one of
 /// the first two 0: what the scene gives (one key at most), else under FLIP for granular
 /// materials [`crate::GRANULAR_PIC_FRACTION`] per step, else none; uniform unless the scene
 /// weights it by noise (not under APIC, which has no share).
-pub(super) fn pic_share(
+fn pic_share(
     ctx: &Ctx<'_>,
     s: &SolverSpec,
     flip: bool,

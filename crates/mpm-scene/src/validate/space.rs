@@ -7,7 +7,7 @@ use glam::DVec2;
 use mpm_contact3d::{Friction, Wall};
 use mpm_grid3d::{MAX_CELLS_PER_AXIS, RegularGrid, TerrainGrid, TerrainGridSpec};
 use mpm_solver3d::generate::{self, Shape};
-use mpm_solver3d::{Boundaries, Outflow, Periodic, SolverConfig, TimeStep, Transfer, Vector};
+use mpm_solver3d::{Boundaries, Outflow, Periodic, SolverConfig, TimeStep, Vector};
 
 use super::{Ctx, bodies, boundaries, finite_pos, materials, num, plausible, serde_error, solver};
 use crate::error::SceneError;
@@ -382,10 +382,7 @@ fn config(
         }
         walls.push(wall);
     }
-    let s = &f.solver;
-    let transfer = s.transfer.unwrap_or_default();
-    let flip = transfer == Transfer::Flip;
-    let (pic_fraction, pic_relaxation, pic_weighting) = solver::pic_share(ctx, s, flip, materials)?;
+    let c = solver::choices(ctx, &f.solver, materials)?;
     let config = SolverConfig {
         scheme: settings.scheme,
         time_step: settings.time_step,
@@ -395,19 +392,15 @@ fn config(
         outflow,
         walls,
         small_mass_ratio: settings.small_mass_ratio,
-        objective_stress: s.objective_stress.unwrap_or_else(|| materials.objective_stress()),
+        objective_stress: c.objective_stress,
         gravity_ramp: settings.gravity_ramp,
-        transfer,
-        pic_fraction,
-        pic_relaxation,
-        pic_weighting,
-        separation_density: s.separation_density.unwrap_or(if flip {
-            materials.separation_density()
-        } else {
-            0.0
-        }),
-        contact: s.contact.unwrap_or_default(),
-        mass: s.mass.unwrap_or_default(),
+        transfer: c.transfer,
+        pic_fraction: c.pic_fraction,
+        pic_relaxation: c.pic_relaxation,
+        pic_weighting: c.pic_weighting,
+        separation_density: c.separation_density,
+        contact: c.contact,
+        mass: c.mass,
     };
     config.validate().map_err(|e| {
         let (path, fix) = match &e {

@@ -490,11 +490,8 @@ mod tests {
     use mpm_contact::Friction;
     use mpm_grid::Bilinear;
     use mpm_grid::testing::{at, grid, volume};
-    #[cfg(not(feature = "dim3"))]
     use mpm_grid::{ActiveNodes, RegularGrid, ShapeFunctions};
 
-    #[cfg(not(feature = "dim3"))]
-    use crate::generate::{Shape, fill};
     use crate::particles::{NewParticle, Particles};
     use crate::{Boundaries, Solver, SolverConfig, Vector};
 
@@ -542,38 +539,34 @@ mod tests {
     /// stencils change nodes on some steps and not on others, and the active set changes on some
     /// of the former, so all three locate paths are taken (asserted); `force_full_locate` makes
     /// every step recompute the stencils and rebuild the active set and its numbering instead.
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding(force_full_locate: bool) -> Vec<u64> {
         sliding_with(force_full_locate, false)
     }
 
     /// `touch`: take `particles_mut()` before every step without changing anything, as scripted
     /// loading does; the stencils computed ahead must then be recomputed, never trusted stale.
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_with(force_full_locate: bool, touch: bool) -> Vec<u64> {
         sliding_on(Bilinear(sliding_grid()), force_full_locate, touch)
     }
 
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_grid() -> RegularGrid {
         grid([0.0; 2], [0.25; 2], [24, 8]).unwrap()
     }
 
     /// `sliding_with` for any shape functions on `sliding_grid`.
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     fn sliding_on<S: ShapeFunctions<N>, const N: usize>(
         shape: S,
         force_full_locate: bool,
         touch: bool,
     ) -> Vec<u64> {
         let mut particles = Particles::default();
-        let block = Shape::Rectangle { min: at(0.5, 0.0), max: at(1.5, 1.0) };
-        for (i, s) in fill(&block, 0.125).into_iter().enumerate() {
+        let block = crate::testing::block([0.5, 0.0], [1.5, 1.0], 0.125);
+        for (i, (position, volume)) in block.into_iter().enumerate() {
             // up to ±0.018 m, so that particles of one column cross a cell edge on different steps
             let jitter = 0.003 * ((i * 7919 % 13) as f64 - 6.0);
             let velocity = at(4.0, 0.0);
-            let x = s.position + at(jitter, 0.0);
-            particles.push(NewParticle::unstressed(x, velocity, s.area, 1000.0, ()));
+            let x = position + at(jitter, 0.0);
+            particles.push(NewParticle::unstressed(x, velocity, volume, 1000.0, ()));
         }
         let config = SolverConfig {
             boundaries: Boundaries {
@@ -601,10 +594,9 @@ mod tests {
         } else {
             assert!(kept > 0 && same_set > 0 && rebuilt > 1, "paths {:?}", s.scratch.paths);
         }
-        s.particles().position.iter().flat_map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
+        s.particles().position.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect()
     }
 
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn reusing_an_unchanged_stencil_set_gives_the_same_bits_as_a_full_locate() {
         assert_eq!(sliding(false), sliding(true));
@@ -613,7 +605,6 @@ mod tests {
     /// Regression: after a step whose particles changed nodes, `particles_mut` dropped the
     /// stencils computed ahead but left the stale numbering marked as valid, so the next step
     /// put mass and force on the wrong nodes.
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn taking_the_particles_mutably_between_steps_changes_nothing() {
         assert_eq!(sliding_with(false, true), sliding(false));
@@ -622,13 +613,12 @@ mod tests {
     /// The same for the 3 × 3 stencils, whose first node lies one node below and left of the
     /// point's nearest node: ghost nodes at j = −1 under the floor, and a first node that
     /// changes at the half-cell lines rather than at the cell edges.
-    #[cfg(not(feature = "dim3"))] // a plane block (`generate::Shape::Rectangle`)
     #[test]
     fn wide_stencils_reuse_what_a_full_locate_would_compute() {
         use mpm_grid::{Gimp, QuadraticBSpline};
         let spline = || QuadraticBSpline::new(sliding_grid());
         assert_eq!(sliding_on(spline(), false, false), sliding_on(spline(), true, false));
-        let gimp = || Gimp::with_particles_per_cell(sliding_grid(), [2, 2]).unwrap();
+        let gimp = || Gimp::with_particles_per_cell(sliding_grid(), [2; mpm_grid::DIM]).unwrap();
         assert_eq!(sliding_on(gimp(), false, false), sliding_on(gimp(), true, false));
     }
 }
