@@ -7,7 +7,8 @@
 //! - [`settings`]: the update scheme (USL, MUSL, USF, USAVG), the velocity transfer, the contact
 //!   rule, the mass matrix, the time-step control with its default and its bound (eq 13), the
 //!   periodic sides and the side walls of plane strain;
-//! - [`EnergyLedger`]: the energies of one instant (SPEC §5);
+//! - [`EnergyLedger`]: the energies of one instant (SPEC §5), and [`EnergyCheck`], the size of
+//!   a run's energy error against the energy it can move around;
 //! - [`StepReport`], [`BranchCounts`] and [`RunEnd`]: what a step and a run tell their observer;
 //! - [`timestep`]: the stable Δt (eq 13) from the fastest signal and speed.
 //!
@@ -18,7 +19,7 @@ mod report;
 pub mod settings;
 pub mod timestep;
 
-pub use ledger::EnergyLedger;
+pub use ledger::{EnergyCheck, EnergyLedger};
 pub use report::{BranchCounts, RunEnd, StepReport};
 pub use settings::{
     BadTimeStep, Contact, DEFAULT_COURANT, DEFAULT_SMALL_MASS_RATIO, MAX_COURANT, MassMatrix,

@@ -8,7 +8,6 @@
 //! step).
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use mpm_grid::ShapeFunctions;
 use mpm_scene::dispatch::{self, Job, SavedState, SceneModel};
@@ -20,8 +19,9 @@ use mpm_output::checkpoint::{self, History};
 use mpm_output::dir::prepare_dir;
 use mpm_output::{OutputError, atomic};
 
-use crate::common::{CheckReport, OUTSIDE_HINT, setup_error, with_pool};
-use crate::driver::{Driver, initial_state};
+use crate::common::{CheckReport, setup_error, with_pool};
+use crate::driver::plane::{Plane, initial_state};
+use crate::driver::{Driver, describe};
 use crate::error::RunError;
 pub use crate::options::RunOptions;
 
@@ -168,41 +168,19 @@ impl Job for RunJob<'_> {
         } else {
             (None, None)
         };
-        let mut driver = Driver::begin(scene, self.out_dir.as_deref(), history, initial, self.opts);
-        driver.progress.start(r.end_time, solver.time(), solver.step_count());
-        if fresh {
-            driver.record_start(&solver)?;
-        } else {
-            driver.rewrite_outputs()?;
-        }
-        let start = Instant::now();
+        let driver =
+            Driver::begin(Plane::new(scene, initial), self.out_dir.as_deref(), history, self.opts);
         // An error of the initial state's explicit ramp names a step of the ramp, not of the run.
         let during_ramp =
             initial_error.is_some() && matches!(r.initial_state, InitialState::GravityRamp { .. });
         let describe = |e: &SolverError| {
-            let hint = if matches!(e, SolverError::OutsideGrid { .. }) { OUTSIDE_HINT } else { "" };
+            let said = describe::<Solver<M, S, N>>(e);
             if during_ramp {
-                format!("initial state (gravity ramp, before the run): {e}{hint}")
+                format!("initial state (gravity ramp, before the run): {said}")
             } else {
-                format!("{e}{hint}")
+                said
             }
         };
-        let result = match initial_error {
-            Some(e) => Err(e),
-            None => solver.run_until(r.end_time, &mut driver),
-        };
-        let elapsed = start.elapsed().as_secs_f64();
-        driver.progress.finish();
-        driver.history.wall_time += elapsed;
-        driver.history.particle_steps += std::mem::take(&mut driver.session_particle_steps);
-        if let Some(e) = driver.io_error.take() {
-            return Err(e);
-        }
-        let (status, error) = driver.status(&result, &solver, &describe);
-        let summary = driver.finish(&solver, status, error, self.threads)?;
-        match result {
-            Err(e) => Err(RunError::Solver { message: describe(&e), summary: Box::new(summary) }),
-            Ok(_) => Ok(summary),
-        }
+        driver.drive(&mut solver, fresh, initial_error, &describe, self.threads)
     }
 }

@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use mpm_grid::ShapeFunctions;
 use mpm_output::checkpoint::{self, CheckpointFile, History};
@@ -25,11 +25,12 @@ use mpm_output::{OutputError, atomic};
 use mpm_scene::dispatch::{self, Job, SceneModel};
 use mpm_scene::materials::ModelJob;
 use mpm_scene::{RunStatus, RunSummary, Scene};
-use mpm_solver::{EnergyLedger, Observer, RunEnd, Solver, SolverError, Vector};
+use mpm_solver::{EnergyLedger, RunEnd, Solver, SolverError, Vector};
 
 mod space;
 
-use crate::driver::{Driver, initial_state};
+use crate::driver::plane::{Plane, initial_state};
+use crate::driver::{Driver, Stepper, Wing};
 use crate::error::RunError;
 use crate::options::RunOptions;
 
@@ -502,7 +503,7 @@ impl Job for Worker {
         let history = History { dt_min: f64::INFINITY, ..History::default() };
         // the scene as changed by `set_material` (its text goes into checkpoints)
         let mut current = scene.clone();
-        let mut driver = Driver::begin(scene, None, history, initial.clone(), &opts);
+        let mut driver = Driver::begin(Plane::new(scene, initial.clone()), None, history, &opts);
         if let Err(e) = driver.record_start(&solver) {
             let _ = self.outbox.send(Reply::Failed(e));
             return;
@@ -525,15 +526,14 @@ impl Job for Worker {
                         Reply::Failed(RunError::Setup("the simulation failed earlier".into()))
                     } else {
                         let mut driver = Driver::begin(
-                            &current,
+                            Plane::new(&current, initial.clone()),
                             None,
                             std::mem::take(&mut history),
-                            initial.clone(),
                             &opts,
                         );
                         let result = advance(&mut solver, &mut driver, limit);
                         failed = result.is_err();
-                        let reply = outcome(&solver, &driver, result, threads);
+                        let reply = outcome(&solver, &driver, result, threads, &|e| e.to_string());
                         history = driver.history;
                         Reply::Advanced(Box::new(reply))
                     }
@@ -543,7 +543,8 @@ impl Job for Worker {
                 }
                 Command::Energy => Reply::Energy(solver.energy()),
                 Command::Summary => {
-                    let mut driver = Driver::begin(&current, None, history, initial.clone(), &opts);
+                    let mut driver =
+                        Driver::begin(Plane::new(&current, initial.clone()), None, history, &opts);
                     let status = if mpm_solver::reached(solver.time(), r.end_time) {
                         RunStatus::Completed
                     } else {
@@ -599,54 +600,34 @@ impl Job for Worker {
 /// steps `solver` by `limit` with `driver` recording, timed into its history.
 fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
     solver: &mut Solver<M, S, N>,
-    driver: &mut Driver<'_>,
+    driver: &mut Driver<'_, Plane<'_>>,
     limit: Limit,
 ) -> Result<RunEnd, SolverError> {
-    let (steps0, start) = (solver.step_count(), Instant::now());
-    let result = match limit {
-        Limit::Time(t) => solver.run_until(t, driver),
-        Limit::Steps(n) => loop {
-            // (once every particle has left through outflow sides there is nothing to step)
-            if solver.step_count() - steps0 >= n || solver.particles().is_empty() {
-                break Ok(RunEnd::EndTime);
-            }
-            // (lands on the next output mark as `run_until` does: `exact_times`)
-            let t = solver.time();
-            let landing = Observer::<M, S, N>::landing(&*driver, t);
-            let cap = if landing > t { landing - t } else { f64::INFINITY };
-            match solver.step_capped(cap) {
-                Err(e) => break Err(e),
-                Ok(report) => {
-                    if driver.after_step(solver, &report).is_break() {
-                        break Ok(RunEnd::Stopped);
-                    }
-                }
-            }
-        },
-    };
-    driver.history.wall_time += start.elapsed().as_secs_f64();
-    driver.history.particle_steps += std::mem::take(&mut driver.session_particle_steps);
-    result
+    match limit {
+        Limit::Time(t) => driver.run(solver, t),
+        Limit::Steps(n) => driver.run_steps(solver, n),
+    }
 }
 
-/// the caller's view of an advance.
-fn outcome<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
-    solver: &Solver<M, S, N>,
-    driver: &Driver<'_>,
-    result: Result<RunEnd, SolverError>,
+/// the caller's view of an advance (a solver error's message through `describe`).
+pub(crate) fn outcome<W: Wing, Sv: Stepper<Vector = W::Vector>>(
+    sv: &Sv,
+    driver: &Driver<'_, W>,
+    result: Result<RunEnd, Sv::Error>,
     threads: usize,
+    describe: &dyn Fn(&Sv::Error) -> String,
 ) -> Result<Advance, RunError> {
-    let (status, error) = driver.status(&result, solver, &|e: &SolverError| e.to_string());
+    let (status, error) = driver.status(&result, sv, describe);
     match result {
         Err(e) => Err(RunError::Solver {
-            message: e.to_string(),
-            summary: Box::new(driver.summary(solver, status, error, threads)),
+            message: describe(&e),
+            summary: Box::new(driver.summary(sv, status, error, threads)),
         }),
         Ok(end) => Ok(Advance {
             stopped: (end == RunEnd::Stopped).then_some(status),
-            time: solver.time(),
-            steps: solver.step_count(),
-            particles: solver.particles().len(),
+            time: sv.time(),
+            steps: sv.step_count(),
+            particles: sv.particles().len(),
         }),
     }
 }

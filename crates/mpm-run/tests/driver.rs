@@ -265,11 +265,13 @@ end_time = 0.12
 interval = 0.03
 checkpoint_interval = 0.05
 hazard_maps = true
+envelope = true
 probes = [{ nearest = [0.5, 0.1, 0.3] }, 7]
 "#;
 
 /// A 3D run stopped part-way writes a checkpoint, and `resume` continues it to the bits of the
-/// same run in one go: state hash, steps, energy ledger and every row of energy.csv.
+/// same run in one go: state hash, steps, energy ledger, every row of energy.csv, runout.csv and
+/// probes.csv, the hazard maps and the envelopes along the runout line.
 #[test]
 fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
     let scene = mpm_scene::load_space_str(BLOCK_3D, "block3d").unwrap();
@@ -312,6 +314,11 @@ fn a_3d_run_resumed_from_its_checkpoint_is_the_run_itself() {
     for map in ["max_height", "max_pressure", "arrival_time", "deposit_depth"] {
         let read = |d: &std::path::Path| std::fs::read(d.join(format!("maps/{map}.tif"))).unwrap();
         assert_eq!(read(&part_dir), read(&whole_dir), "maps/{map}.tif as in one go");
+    }
+    for file in ["envelope.csv", "deposit.csv", "section.geojson"] {
+        let read = |d: &std::path::Path| std::fs::read_to_string(d.join(file)).unwrap();
+        assert_eq!(read(&part_dir), read(&whole_dir), "{file} as in one go");
+        assert!(read(&whole_dir).lines().count() > 2, "{file} has rows");
     }
     std::fs::remove_dir_all(&base).unwrap();
 }
@@ -428,6 +435,88 @@ hazard_maps = true
             assert!(t >= reach - 1e-9 && t < reach + s.dt.max + 1e-9, "({col}, {row}): {t}");
         }
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The 3D envelopes along the runout line: a block 0.4 m long, 0.2 m high and 0.4 m wide
+/// slides rigidly at 2 m/s along +x for 0.5 s (no gravity, a frictionless floor), so the strip
+/// one plan cell wide about the line through its centre of mass (z = 0.5 m) sees, at every
+/// station of 0.1 m the block passes over (x from 0.2 to 1.6 m), a flow 0.2 m thick moving at
+/// 2 m/s, with the impact pressure ρ̄ū² = 1600 · 4 (its particles fill their volumes exactly);
+/// the deposit is 0.2 m thick over x ∈ [1.2, 1.6] m and nothing beside; the stations lie on
+/// the map at (x, −0.5), the line running from x = 0 to the grid's end at 2 m. These are the
+/// 2D envelopes' columns, whose numbers are tested in 2D; tolerance 1e-9 as the hazard maps'
+/// (a uniform velocity field stays uniform to round-off).
+#[test]
+fn a_rigidly_sliding_block_draws_exact_envelopes_along_its_runout_line() {
+    let text = r#"
+[grid]
+dimension = 3
+kind = "regular"
+origin = [0.0, 0.0, 0.0]
+cell = [0.1, 0.1, 0.1]
+cells = [20, 4, 10]
+[materials.block]
+kind = "elastic"
+young = 1.0e6
+poisson = 0.3
+density = 1600.0
+[[bodies]]
+material = "block"
+shape = "box"
+min = [0.2, 0.0, 0.3]
+max = [0.6, 0.2, 0.7]
+velocity = [2.0, 0.0, 0.0]
+[boundaries]
+ground = "frictionless"
+[solver]
+gravity = [0.0, 0.0, 0.0]
+end_time = 0.5
+[output]
+vtk = false
+plots = false
+envelope = true
+"#;
+    let scene = mpm_scene::load_space_str(text, "slide").unwrap();
+    let dir = std::env::temp_dir().join(format!("mpm-envelope3d-{}", std::process::id()));
+    mpm_run::run_space_scene(
+        &scene,
+        &RunOptions { out_dir: Some(dir.clone()), force: true, ..Default::default() },
+    )
+    .unwrap();
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let rows = |name: &str| -> Vec<Vec<f64>> {
+        let text = std::fs::read_to_string(dir.join(name)).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        assert!(header.ends_with(",map_x,map_y"), "{name}: {header}");
+        lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect()
+    };
+    // x, ground, max_thickness, max_mean_speed, max_speed, max_pressure, arrival, map_x, map_y
+    let envelope = rows("envelope.csv");
+    assert_eq!(envelope.len(), 20, "a station per plan cell along the 2 m line");
+    for (k, r) in envelope.iter().enumerate() {
+        let x = (k as f64 + 0.5) * 0.1;
+        assert!(near(r[0], x) && near(r[1], 0.0) && near(r[7], x) && near(r[8], -0.5), "{r:?}");
+        if (0.2..1.6).contains(&x) {
+            assert!(near(r[2], 0.2) && near(r[3], 2.0) && near(r[4], 2.0), "station {x}: {r:?}");
+            assert!(near(r[5], 6400.0), "station {x}: {r:?}");
+        } else {
+            assert!(r[2] == 0.0 && r[6].is_nan(), "station {x} untouched: {r:?}");
+        }
+    }
+    // x, ground, thickness, map_x, map_y
+    for r in rows("deposit.csv") {
+        let expected = if (1.2..1.6).contains(&r[0]) { 0.2 } else { 0.0 };
+        assert!(near(r[2], expected), "deposit at {}: {r:?}", r[0]);
+    }
+    let line = std::fs::read_to_string(dir.join("section.geojson")).unwrap();
+    let line: serde_json::Value = serde_json::from_str(&line).unwrap();
+    let ends = &line["features"][0]["geometry"]["coordinates"];
+    let at = |k: usize, c: usize| ends[k][c].as_f64().unwrap();
+    let ends = [at(0, 0), at(0, 1), at(1, 0), at(1, 1)];
+    assert!(near(ends[0], 0.0) && near(ends[1], -0.5) && near(ends[2], 2.0), "{ends:?}");
+    assert!(near(ends[3], -0.5), "{ends:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

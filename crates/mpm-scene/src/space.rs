@@ -155,6 +155,10 @@ pub struct SpaceOutput {
     /// whether hazard maps are observed every step and written at the end
     /// ([`crate::plan::PlanEnvelope`]).
     pub hazard_maps: bool,
+    /// whether hazard envelopes are observed every step along the runout line, the vertical
+    /// section through the source's centre of mass along `runout_direction`, in a strip one
+    /// plan cell wide (`envelope.csv`, `deposit.csv`, `section.geojson`).
+    pub envelope: bool,
     /// an observed deposit to compare the run's with (`[output] observed = { deposit =
     /// "depth.asc" }`): the file as the scene names it and its raster of vertical depths.
     pub observed: Option<(String, mpm_dem::Raster)>,
@@ -235,6 +239,11 @@ impl SpaceScene {
     /// the scene's title, if it has one.
     pub fn title(&self) -> Option<&str> {
         self.file.title.as_deref()
+    }
+
+    /// the DEM a terrain grid follows, as the scene names it (`None` on a regular grid).
+    pub fn dem(&self) -> Option<&str> {
+        self.file.grid.dem.as_deref()
     }
 
     /// number of particles.

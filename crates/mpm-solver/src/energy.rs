@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::math::{Real, Vector};
 
-pub use mpm_core::EnergyLedger;
+pub use mpm_core::{EnergyCheck, EnergyLedger};
 
 /// Energy dissipated so far, carried by the solver between steps (and in checkpoints).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -58,116 +58,4 @@ pub struct Outflowed {
     pub energy: Real,
     /// when the first one left (s); `None` while none has.
     pub first_time: Option<Real>,
-}
-
-/// The size of a run's energy error, judged against the energy the run can move around.
-///
-/// The ledger's residual alone has no scale: the potential energy's zero is arbitrary. It is
-/// judged against
-/// `scale(t) = KE₀ + U₀ + Σ_p m_p |g| h_p + released(t)`:
-/// the initial kinetic and strain energy, the potential energy of every particle above the
-/// ground below it at the start (h_p ≥ 0, full gravity), and the largest energy the motion has
-/// released so far, max over time of (P₀ − (P(t) + O(t) − W_ext(t))): the drop of potential
-/// energy not counting what a gravity ramp booked as external work (which depends on where the
-/// origin is, not on the motion), nor the energy O(t) that particles carried out through outflow
-/// sides (their potential would otherwise count as released, by their height above the origin).
-/// The relative residual `residual / scale` is 0 for a perfect integrator, positive when the
-/// integration creates energy and negative when it loses energy it does not book as dissipation
-/// (a body crushed into the floor, a collapse that a contact law absorbs without friction work).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct EnergyCheck {
-    /// KE₀ + U₀ + Σ m_p |g| h_p (J/m).
-    pub initial_scale: Real,
-    /// potential energy at the start (J/m).
-    pub initial_potential: Real,
-    /// largest drop of potential energy below its initial value so far (J/m).
-    pub released: Real,
-    /// the relative residual of largest magnitude seen so far (signed).
-    pub worst: Real,
-    /// when it was seen (s).
-    pub worst_time: Real,
-}
-
-impl EnergyCheck {
-    /// starts from the initial ledger of particles at `position` with masses `mass`, under
-    /// gravity of magnitude `g`, above the ground of height `ground(x)` under each particle
-    /// position x (h_p = the particle's height above it, 0 below it).
-    pub fn new(
-        initial: &EnergyLedger,
-        position: &[Vector],
-        mass: &[Real],
-        g: Real,
-        ground: impl Fn(Vector) -> Real,
-    ) -> Self {
-        let height_energy: Real =
-            position.iter().zip(mass).map(|(x, m)| m * g * (x.y - ground(*x)).max(0.0)).sum();
-        Self {
-            initial_scale: initial.kinetic + initial.strain + height_energy,
-            initial_potential: initial.potential,
-            ..Self::default()
-        }
-    }
-
-    /// the scale of `e` (see the type's docs), after taking its potential energy into account.
-    fn scale(&mut self, e: &EnergyLedger) -> Real {
-        // (what left through outflow sides counts with the potential: else each particle that
-        // leaves would "release" its height above the origin)
-        let potential = e.potential + e.outflow;
-        self.released = self.released.max(self.initial_potential - (potential - e.external_work));
-        self.initial_scale + self.released
-    }
-
-    /// the relative residual of `e` at time `t`, remembered if it is the largest in magnitude so
-    /// far. A residual without any scale (nothing moves, nothing is stored) counts as 0; a
-    /// non-finite one as +∞.
-    pub fn observe(&mut self, t: Real, e: &EnergyLedger) -> Real {
-        let scale = self.scale(e);
-        let r = if !e.residual.is_finite() || !scale.is_finite() {
-            Real::INFINITY
-        } else if scale > 0.0 {
-            e.residual / scale
-        } else {
-            0.0
-        };
-        if r.abs() > self.worst.abs() || r.is_nan() {
-            self.worst = r;
-            self.worst_time = t;
-        }
-        r
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// the point (x, y) of the plane, or of the x–y plane in space.
-    fn at(x: Real, y: Real) -> Vector {
-        let mut p = Vector::ZERO;
-        (p.x, p.y) = (x, y);
-        p
-    }
-
-    fn ledger(kinetic: Real, potential: Real, residual: Real) -> EnergyLedger {
-        EnergyLedger { kinetic, potential, residual, ..Default::default() }
-    }
-
-    #[test]
-    fn the_scale_grows_with_the_released_potential_and_keeps_the_worst_residual() {
-        // A body of m g h = 100 J/m above the ground, at rest: 1 kg at 10 m under g = 10 m/s²
-        // (ground at y = 2), and a particle below the ground, which adds nothing.
-        let position = [at(3.0, 12.0), at(0.0, -1.0)];
-        let ground = |_x: Vector| 2.0;
-        let mut c =
-            EnergyCheck::new(&ledger(0.0, 500.0, 0.0), &position, &[1.0, 5.0], 10.0, ground);
-        assert_eq!(c.observe(0.0, &ledger(0.0, 500.0, 0.0)), 0.0);
-        // It falls 60 J/m and shows a residual of −16 J/m: −16 / (100 + 60).
-        assert_eq!(c.observe(1.0, &ledger(44.0, 440.0, -16.0)), -0.1);
-        // It rises again: the released energy keeps its largest value (60), so +8 J/m is 0.05.
-        assert_eq!(c.observe(2.0, &ledger(0.0, 470.0, 8.0)), 0.05);
-        assert_eq!((c.worst, c.worst_time), (-0.1, 1.0));
-        // A non-finite residual is the worst possible.
-        assert_eq!(c.observe(3.0, &ledger(0.0, 470.0, Real::NAN)), Real::INFINITY);
-        assert_eq!(c.worst, Real::INFINITY);
-    }
 }

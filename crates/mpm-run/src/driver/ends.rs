@@ -1,25 +1,23 @@
-//! The 2D run's two ends: its driver begun (a new or resumed run, its output files opened, its
-//! first records written) and finished (how it ended, the final files and the summary).
+//! The run's two ends, in either dimension: its driver begun (a new or resumed run, its first
+//! records written) and finished (how it ended, the final files and the summary).
 
 use super::*;
 
-impl<'a> Driver<'a> {
-    /// the driver of a run of `scene` writing into `dir`, continuing `history` (empty for a new
-    /// run; a new run's `stop_at_rest` watch starts empty, a resumed one's from its rows).
+impl<'a, W: Wing> Driver<'a, W> {
+    /// the driver of a run writing into `dir`, continuing `history` (empty for a new run; a new
+    /// run's `stop_at_rest` watch starts empty, a resumed one's from its rows).
     pub(crate) fn begin(
-        scene: &'a Scene,
+        wing: W,
         dir: Option<&'a Path>,
         history: History,
-        initial: Option<InitialStateSummary>,
-        opts: &RunOptions,
+        opts: &crate::options::RunOptions,
     ) -> Self {
-        let rest = match scene.resolved().stop_at_rest {
+        let rest = match wing.common().stop_at_rest {
             Some(rest) => RestWatch::over(&history.energy, rest.kinetic_fraction),
             None => RestWatch::default(),
         };
         Driver {
-            initial,
-            scene,
+            wing,
             dir,
             history,
             flushed: Flushed::default(),
@@ -33,50 +31,30 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// a new run's first records: the envelopes, the initial runout measures, the energy check's
-    /// scale, the first series row and frame.
-    pub(crate) fn record_start<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    /// a new run's first records: the dimension's (the initial runout measures, the energy
+    /// check's scale, envelopes or maps), then the first series row and frame.
+    pub(crate) fn record_start<Sv: Stepper<Vector = W::Vector>>(
         &mut self,
-        solver: &Solver<M, S, N>,
+        sv: &Sv,
     ) -> Result<(), RunError> {
-        let r = self.scene.resolved();
-        if r.output.envelope {
-            let column = r.grid.column_width();
-            let mut e = Envelope::new(&r.ground, column);
-            observe(&mut e, r, solver);
-            self.history.envelope = Some(e);
-        }
-        let m0 = self.metrics(solver);
-        self.history.initial = Some(m0);
-        self.history.edges = edge_watch(r);
-        let f = Flow::of(r, solver.particles());
-        let top = f.initial_position.iter().copied().max_by(|a, b| a.y.total_cmp(&b.y));
-        self.history.crown = top.map(|c| [c.x, c.y, 0.0]);
-        let p = solver.particles();
-        self.history.energy_check = Some(EnergyCheck::new(
-            &solver.energy(),
-            &p.position,
-            &p.mass,
-            r.config.gravity.length(),
-            |x| ground_height(&r.ground, x.x),
-        ));
-        self.record_series(solver);
-        self.write_frame(solver)?;
+        self.wing.start(&mut self.history, sv);
+        self.record_series(sv);
+        self.write_frame(sv)?;
         self.flush_series()
     }
 
     /// how the run ended, and its message: from the solver's result and why the driver stopped
     /// it (an error's message through `describe`).
-    pub(crate) fn status<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    pub(crate) fn status<Sv: Stepper<Vector = W::Vector>>(
         &self,
-        result: &Result<RunEnd, SolverError>,
-        solver: &Solver<M, S, N>,
-        describe: &dyn Fn(&SolverError) -> String,
+        result: &Result<RunEnd, Sv::Error>,
+        sv: &Sv,
+        describe: &dyn Fn(&Sv::Error) -> String,
     ) -> (RunStatus, Option<String>) {
-        let r = self.scene.resolved();
+        let c = self.wing.common();
         match (result, self.stop) {
             // (no checkpoint: the run has not started, see `finish`)
-            (Err(e @ SolverError::InitialStateInterrupted { .. }), _) => {
+            (Err(e), _) if Sv::interrupted_initial_state(e) => {
                 (RunStatus::Interrupted, Some(describe(e)))
             }
             (Err(e), _) => (RunStatus::Failed, Some(describe(e))),
@@ -86,15 +64,15 @@ impl<'a> Driver<'a> {
                     "step limit: {} steps reached at t = {:.6e} s before end_time = {} s (Δt \
                      {:.3e} s); no checkpoint is written: if the run is sound, run the scene \
                      again with a higher `[solver] max_steps`",
-                    solver.step_count(),
-                    solver.time(),
-                    r.end_time,
-                    solver.last_report().dt
+                    sv.step_count(),
+                    sv.time(),
+                    c.end_time,
+                    sv.last_dt()
                 )),
             ),
             (Ok(RunEnd::Stopped), Some(Stop::AtRest)) => (RunStatus::AtRest, None),
             (Ok(RunEnd::Stopped), Some(Stop::EnergyAlarm)) => {
-                (RunStatus::EnergyAlarm, alarm_message(&self.history, r.alarm.threshold))
+                (RunStatus::EnergyAlarm, alarm_message(&self.history, c.alarm.threshold))
             }
             (Ok(RunEnd::Stopped), None) => (RunStatus::Interrupted, None),
             // (judged in `finish`, once the final row is in)
@@ -103,46 +81,130 @@ impl<'a> Driver<'a> {
     }
 
     /// ends the run's files: the checkpoint of an interrupted run, the final series row and
-    /// frame, the energy alarm judged on the last state too, the envelopes, plots and
-    /// `summary.json`; returns the summary.
-    pub(crate) fn finish<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
+    /// frame, the energy alarm judged on the last state too, the dimension's files (envelopes
+    /// or maps, plots) and `summary.json`; returns the summary.
+    pub(crate) fn finish<Sv: Stepper<Vector = W::Vector>>(
         &mut self,
-        solver: &Solver<M, S, N>,
+        sv: &Sv,
         status: RunStatus,
         error: Option<String>,
         threads: usize,
     ) -> Result<RunSummary, RunError> {
-        let r = self.scene.resolved();
         // The checkpoint holds the history as an uninterrupted run has it at this step (the
         // extra row and frame of the stop below are not part of it).
         // (an interrupted initial state has none: a resume would start the run without it)
         if status == RunStatus::Interrupted && error.is_none() {
-            self.write_checkpoint(solver)?;
+            self.write_checkpoint(sv)?;
         }
         // the final state: a last series row and frame unless this very step was recorded.
-        let t = solver.time();
+        let t = sv.time();
         if self.history.energy.last().is_none_or(|row| row.time < t) {
-            self.record_series(solver);
+            self.record_series(sv);
         }
         if self.history.frames.last().is_none_or(|f| f.0 < t) {
-            self.write_frame(solver)?;
+            self.write_frame(sv)?;
         }
         // The final row may trip the alarm: a run is judged on its last state too.
+        let threshold = self.wing.common().alarm.threshold;
         let (status, error) = match status {
             RunStatus::Completed | RunStatus::AtRest if self.history.alarm_time.is_some() => {
-                (RunStatus::EnergyAlarm, alarm_message(&self.history, r.alarm.threshold))
+                (RunStatus::EnergyAlarm, alarm_message(&self.history, threshold))
             }
             _ => (status, error),
         };
         self.flush_series()?;
-        let summary = self.summary(solver, status, error, threads);
+        let summary = self.summary(sv, status, error, threads);
         if let Some(dir) = self.dir {
-            self.envelope_files(solver)?;
-            self.plots(solver)?;
+            self.wing.files(&self.history, sv, dir, &summary)?;
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
         }
         Ok(summary)
+    }
+
+    /// steps `sv` to `end` with this driver observing, the session's wall time and
+    /// particle-steps added to the history.
+    pub(crate) fn run<Sv: Stepper<Vector = W::Vector>>(
+        &mut self,
+        sv: &mut Sv,
+        end: f64,
+    ) -> Result<RunEnd, Sv::Error> {
+        let start = Instant::now();
+        let result = sv.run_to(end, self);
+        self.close_session(start);
+        result
+    }
+
+    /// steps `sv` by `steps` steps (fewer when the driver stops it), landing on the output
+    /// marks as [`Self::run`] does.
+    pub(crate) fn run_steps<Sv: Stepper<Vector = W::Vector>>(
+        &mut self,
+        sv: &mut Sv,
+        steps: u64,
+    ) -> Result<RunEnd, Sv::Error> {
+        let (steps0, start) = (sv.step_count(), Instant::now());
+        let result = loop {
+            // (once every particle has left through outflow sides there is nothing to step)
+            if sv.step_count() - steps0 >= steps || sv.particles().len() == 0 {
+                break Ok(RunEnd::EndTime);
+            }
+            let t = sv.time();
+            let landing = self.next_landing(t);
+            let cap = if landing > t { landing - t } else { f64::INFINITY };
+            match sv.step_within(cap) {
+                Err(e) => break Err(e),
+                Ok(report) => {
+                    if self.stepped(sv, &report).is_break() {
+                        break Ok(RunEnd::Stopped);
+                    }
+                }
+            }
+        };
+        self.close_session(start);
+        result
+    }
+
+    /// adds a stepping session's wall time and particle-steps to the history.
+    fn close_session(&mut self, start: Instant) {
+        self.history.wall_time += start.elapsed().as_secs_f64();
+        self.history.particle_steps += std::mem::take(&mut self.session_particle_steps);
+    }
+
+    /// runs a built solver to the scene's end time and ends the run: a new run's first records
+    /// (or a resumed run's files rewritten from its history), the steps, the final files and the
+    /// summary. `early` is an error before the first step (a failed initial state); `describe`
+    /// words a solver error. A solver error returns [`RunError::Solver`] after the files.
+    pub(crate) fn drive<Sv: Stepper<Vector = W::Vector>>(
+        mut self,
+        sv: &mut Sv,
+        fresh: bool,
+        early: Option<Sv::Error>,
+        describe: &dyn Fn(&Sv::Error) -> String,
+        threads: usize,
+    ) -> Result<RunSummary, RunError> {
+        let end = self.wing.common().end_time;
+        self.progress.start(end, sv.time(), sv.step_count());
+        if fresh {
+            self.record_start(sv)?;
+        } else {
+            // the rows and frames a stopped session wrote past its checkpoint give way to the
+            // checkpoint's
+            self.rewrite_outputs()?;
+        }
+        let result = match early {
+            Some(e) => Err(e),
+            None => self.run(sv, end),
+        };
+        self.progress.finish();
+        if let Some(e) = self.io_error.take() {
+            return Err(e);
+        }
+        let (status, error) = self.status(&result, sv, describe);
+        let summary = self.finish(sv, status, error, threads)?;
+        match result {
+            Err(e) => Err(RunError::Solver { message: describe(&e), summary: Box::new(summary) }),
+            Ok(_) => Ok(summary),
+        }
     }
 }

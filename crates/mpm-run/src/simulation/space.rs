@@ -8,13 +8,14 @@ use mpm_scene::SpaceScene;
 use mpm_scene::dispatch::SceneModel;
 use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::RunStatus;
-use mpm_solver3d::{Observer, RunEnd, Solver, Vector};
+use mpm_solver3d::{Solver, Vector};
 
-use super::{Advance, Command, Limit, Reply, SpaceFields, Worker, argument, write_checkpoint};
+use super::{Command, Limit, Reply, SpaceFields, Worker, argument, outcome, write_checkpoint};
 use crate::common::setup_error;
+use crate::driver::space::Space;
+use crate::driver::{Driver, describe};
 use crate::error::RunError;
 use crate::options::RunOptions;
-use crate::space::{SpaceDriver, Stop, describe};
 
 /// The 3D side of [`crate::Simulation`]: builds the 3D solver with the scene's types and serves
 /// the commands the 2D worker serves (`simulation.rs`), recording as a run without an output
@@ -42,11 +43,16 @@ impl SpaceJob for SpaceWorker {
         };
         let opts = RunOptions { interrupt: Some(interrupt), ..Default::default() };
         let mut current = scene.clone();
-        let mut history = {
-            let mut d = SpaceDriver::begin(&current, None, &opts, &solver, None);
-            d.record(&solver);
-            d.history()
-        };
+        let mut history = History { dt_min: f64::INFINITY, ..History::default() };
+        {
+            let wing = Space::new(&current, &history, &solver);
+            let mut d = Driver::begin(wing, None, std::mem::take(&mut history), &opts);
+            if let Err(e) = d.record_start(&solver) {
+                let _ = outbox.send(Reply::Failed(e));
+                return;
+            }
+            history = d.history;
+        }
         let ready = Reply::Ready {
             time: solver.time(),
             steps: solver.step_count(),
@@ -56,11 +62,6 @@ impl SpaceJob for SpaceWorker {
             return;
         }
         let threads = rayon::current_num_threads();
-        // the summary of the run now, from a driver of the records so far (left as they are)
-        let summary = |solver: &Solver<M, S, N>, scene: &SpaceScene, h: &History, status, error| {
-            let mut d = SpaceDriver::begin(scene, None, &opts, solver, Some(h.clone()));
-            d.finish(solver, status, error, threads)
-        };
         let mut failed = false;
         while let Ok(command) = inbox.recv() {
             let reply = match command {
@@ -68,58 +69,15 @@ impl SpaceJob for SpaceWorker {
                     Reply::Failed(RunError::Setup("the simulation failed earlier".into()))
                 }
                 Command::Advance(limit) => {
-                    let mut d =
-                        SpaceDriver::begin(&current, None, &opts, &solver, Some(history.clone()));
-                    let steps0 = solver.step_count();
+                    let wing = Space::new(&current, &history, &solver);
+                    let mut d = Driver::begin(wing, None, std::mem::take(&mut history), &opts);
                     let result = match limit {
-                        Limit::Time(t) => solver.run_until(t, &mut d),
-                        Limit::Steps(n) => loop {
-                            if solver.step_count() - steps0 >= n || solver.particles().is_empty() {
-                                break Ok(RunEnd::EndTime);
-                            }
-                            // (lands on the next output mark as `run_until` does)
-                            let t = solver.time();
-                            let landing = Observer::<M, S, N>::landing(&d, t);
-                            let cap = if landing > t { landing - t } else { f64::INFINITY };
-                            match solver.step_capped(cap) {
-                                Err(e) => break Err(e),
-                                Ok(report) => {
-                                    if d.after_step(&solver, &report).is_break() {
-                                        break Ok(RunEnd::Stopped);
-                                    }
-                                }
-                            }
-                        },
+                        Limit::Time(t) => d.run(&mut solver, t),
+                        Limit::Steps(n) => d.run_steps(&mut solver, n),
                     };
-                    history = d.history();
-                    let reply = match result {
-                        Err(e) => {
-                            failed = true;
-                            let message = describe(&e);
-                            let s = summary(
-                                &solver,
-                                &current,
-                                &history,
-                                RunStatus::Failed,
-                                Some(message.clone()),
-                            );
-                            match s {
-                                Ok(s) => Err(RunError::Solver { message, summary: Box::new(s) }),
-                                Err(e) => Err(e),
-                            }
-                        }
-                        Ok(end) => Ok(Advance {
-                            stopped: (end == RunEnd::Stopped).then_some(match d.stop {
-                                Some(Stop::AtRest) => RunStatus::AtRest,
-                                Some(Stop::EnergyAlarm) => RunStatus::EnergyAlarm,
-                                Some(Stop::StepLimit) => RunStatus::StepLimit,
-                                None => RunStatus::Interrupted,
-                            }),
-                            time: solver.time(),
-                            steps: solver.step_count(),
-                            particles: solver.particles().len(),
-                        }),
-                    };
+                    failed = result.is_err();
+                    let reply = outcome(&solver, &d, result, threads, &describe::<Solver<M, S, N>>);
+                    history = d.history;
                     Reply::Advanced(Box::new(reply))
                 }
                 Command::Fields => {
@@ -151,10 +109,11 @@ impl SpaceJob for SpaceWorker {
                     } else {
                         RunStatus::Interrupted
                     };
-                    match summary(&solver, &current, &history, status, None) {
-                        Ok(s) => Reply::Summary(Box::new(s)),
-                        Err(e) => Reply::Failed(e),
-                    }
+                    let wing = Space::new(&current, &history, &solver);
+                    let d = Driver::begin(wing, None, std::mem::take(&mut history), &opts);
+                    let s = d.summary(&solver, status, None, threads);
+                    history = d.history;
+                    Reply::Summary(Box::new(s))
                 }
                 Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
                     &dir,

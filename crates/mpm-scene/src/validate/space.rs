@@ -481,17 +481,14 @@ fn output(
     seeds: &[SpaceSeed],
 ) -> Result<SpaceOutput, SceneError> {
     let o = &f.output;
-    let refused = [
-        ("output.reference", o.reference.is_some()),
-        ("output.envelope", o.envelope == Some(true)),
-    ];
+    let refused = [("output.reference", o.reference.is_some())];
     if let Some((path, _)) = refused.iter().find(|(_, here)| *here) {
         return Err(ctx.err(
             path,
             None,
             "this output is not available in 3D scenes yet",
             "interval, series_interval, exact_times, checkpoint_interval, fields, vtk, \
-             vtk_format, plots, probes, runout_direction, hazard_maps, observed",
+             vtk_format, plots, probes, runout_direction, hazard_maps, envelope, observed",
             "remove it (3D runs write frames, energy.csv, runout.csv, probes.csv, checkpoints \
              and summary.json)",
         ));
@@ -598,6 +595,7 @@ fn output(
         plots: o.plots.unwrap_or(true),
         checkpoint_interval: o.checkpoint_interval,
         hazard_maps,
+        envelope: o.envelope.unwrap_or(false),
         crs: mpm_dem::Crs::default(),
     })
 }
