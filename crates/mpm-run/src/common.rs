@@ -126,3 +126,30 @@ where
     let pool = b.build().map_err(|e| RunError::Setup(format!("cannot start threads: {e}")))?;
     pool.install(|| f(rayon::current_num_threads()))
 }
+
+/// a new run of a scene whose text is `text`, with its plausibility `warnings` and `particles`
+/// particles, of either dimension: the arguments checked before the folder (a refused one
+/// leaves an earlier run's files as they are), the folder prepared and locked until the run
+/// returns (a second run into it is refused meanwhile) with `scene.toml` in it, the warnings
+/// reported, and `run` called in the run's thread pool with its thread count.
+pub(crate) fn new_run<T: Send>(
+    opts: &RunOptions,
+    text: &str,
+    warnings: &[mpm_scene::Warning],
+    particles: usize,
+    run: impl FnOnce(usize) -> Result<T, RunError> + Send,
+) -> Result<T, RunError> {
+    crate::options::available_threads(opts.threads)?;
+    let _lock = match &opts.out_dir {
+        Some(dir) => {
+            let lock = mpm_output::dir::prepare_dir(dir, opts.force)?;
+            mpm_output::atomic::write(&dir.join("scene.toml"), text.as_bytes())?;
+            Some(lock)
+        }
+        None => None,
+    };
+    for w in warnings {
+        opts.progress.warn(&w.to_string());
+    }
+    with_pool(opts, particles, run)
+}

@@ -15,11 +15,10 @@ use mpm_scene::summary::RunSummary;
 use mpm_scene::{GridBuilt, InitialState, Scene};
 use mpm_solver::{Solver, SolverError};
 
+use mpm_output::OutputError;
 use mpm_output::checkpoint::{self, History};
-use mpm_output::dir::prepare_dir;
-use mpm_output::{OutputError, atomic};
 
-use crate::common::{CheckReport, setup_error, with_pool};
+use crate::common::{CheckReport, new_run, setup_error};
 use crate::driver::plane::{Plane, initial_state};
 use crate::driver::{Driver, describe};
 use crate::error::RunError;
@@ -97,25 +96,10 @@ pub fn check_scene(scene: &Scene) -> Result<CheckReport, RunError> {
 /// [`RunError::Solver`] after writing the files reached so far (including a frame of the
 /// failing state and the summary with the error).
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<RunSummary, RunError> {
-    // the arguments before the folder: a refused one leaves an earlier run's files as they are
-    crate::options::available_threads(opts.threads)?;
-    // Held until the run returns: a second run into the directory is refused meanwhile.
-    let _lock = match &opts.out_dir {
-        Some(dir) => {
-            let lock = prepare_dir(dir, opts.force)?;
-            atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
-            Some(lock)
-        }
-        None => None,
-    };
-    for w in &scene.resolved().warnings {
-        opts.progress.warn(&w.to_string());
-    }
-    with_pool(opts, scene.resolved().seeds.len(), |threads| {
-        dispatch::dispatch(
-            scene,
-            RunJob { opts, resume: None, threads, out_dir: opts.out_dir.clone() },
-        )?
+    let r = scene.resolved();
+    new_run(opts, scene.text(), &r.warnings, r.seeds.len(), |threads| {
+        let out_dir = opts.out_dir.clone();
+        dispatch::dispatch(scene, RunJob { opts, resume: None, threads, out_dir })?
     })
 }
 

@@ -8,16 +8,14 @@ use std::path::{Path, PathBuf};
 
 use mpm_grid3d::ShapeFunctions;
 use mpm_output::OutputError;
-use mpm_output::atomic;
 use mpm_output::checkpoint::{self, CheckpointFile, History};
-use mpm_output::dir::prepare_dir;
 use mpm_scene::dispatch::SceneModel;
 use mpm_scene::space::{SpaceJob, space_particles};
 use mpm_scene::summary::RunSummary;
 use mpm_scene::{SavedState, SpaceScene, dispatch_space};
 use mpm_solver3d::Solver;
 
-use crate::common::{CheckReport, setup_error, with_pool};
+use crate::common::{CheckReport, new_run, setup_error, with_pool};
 use crate::driver::space::Space;
 use crate::driver::{Driver, describe};
 use crate::error::RunError;
@@ -66,20 +64,7 @@ pub fn check_space_scene(scene: &SpaceScene) -> Result<CheckReport, RunError> {
 /// after a step with a checkpoint that `mpm resume` continues). Returns the summary of a completed, stopped or interrupted run; a
 /// solver instability returns [`RunError::Solver`] after writing the files reached so far.
 pub fn run_space_scene(scene: &SpaceScene, opts: &RunOptions) -> Result<RunSummary, RunError> {
-    // the arguments before the folder: a refused one leaves an earlier run's files as they are
-    crate::options::available_threads(opts.threads)?;
-    let _lock = match &opts.out_dir {
-        Some(dir) => {
-            let lock = prepare_dir(dir, opts.force)?;
-            atomic::write(&dir.join("scene.toml"), scene.text().as_bytes())?;
-            Some(lock)
-        }
-        None => None,
-    };
-    for w in &scene.warnings {
-        opts.progress.warn(&w.to_string());
-    }
-    with_pool(opts, scene.seeds.len(), |threads| {
+    new_run(opts, scene.text(), &scene.warnings, scene.seeds.len(), |threads| {
         let run = SpaceRun { opts, threads, resume: None, dir: opts.out_dir.clone() };
         dispatch_space(scene, run)?
     })

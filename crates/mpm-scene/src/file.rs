@@ -18,7 +18,7 @@ mod space;
 pub use boundary::BoundarySpec;
 pub use space::{
     Axis, SpaceBodySpec, SpaceBoundariesSpec, SpaceFile, SpaceGridSpec, SpaceShapeKind,
-    SpaceWallSpec,
+    SpaceTables, SpaceWallSpec,
 };
 
 mod output;
@@ -27,34 +27,64 @@ pub use output::{
     VtkFormat,
 };
 
-/// A whole scene file.
+/// A whole scene file, of either dimension: the tables every scene has and the three whose
+/// form depends on its dimension (`D`: the grid, the bodies, the boundaries). [`SceneFile`] is
+/// a plane-strain scene's, [`SpaceFile`] a 3D scene's (`[grid] dimension = 3`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SceneFile {
+#[serde(deny_unknown_fields, bound = "")]
+pub struct SceneFileOf<D: Tables> {
     /// one-line description, shown by `mpm scenes` and `mpm check`.
     #[serde(default)]
     pub title: Option<String>,
     /// the background grid.
-    pub grid: GridSpec,
+    pub grid: D::Grid,
     /// named materials, referred to by `bodies[].material`.
     pub materials: BTreeMap<String, MaterialSpec>,
     /// bodies filled with material points.
-    pub bodies: Vec<BodySpec>,
+    pub bodies: Vec<D::Body>,
     /// boundary friction laws.
     #[serde(default)]
-    pub boundaries: BoundariesSpec,
-    /// time stepping.
+    pub boundaries: D::Boundaries,
+    /// time stepping (`gravity` has a component per axis).
     pub solver: SolverSpec,
     /// what to write.
     #[serde(default)]
     pub output: OutputSpec,
-    /// the stresses the run starts from (stress-free by default).
+    /// the stresses the run starts from (stress-free by default; 2D only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_state: Option<InitialStateSpec>,
     /// plausibility warnings this scene means to have, by name (`mpm check` prints the names).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub silence: Vec<String>,
 }
+
+/// The tables of a scene file whose form depends on its dimension.
+pub trait Tables {
+    /// `[grid]`.
+    type Grid: Clone + std::fmt::Debug + PartialEq + Serialize + serde::de::DeserializeOwned;
+    /// one `[[bodies]]` entry.
+    type Body: Clone + std::fmt::Debug + PartialEq + Serialize + serde::de::DeserializeOwned;
+    /// `[boundaries]`.
+    type Boundaries: Clone
+        + std::fmt::Debug
+        + PartialEq
+        + Default
+        + Serialize
+        + serde::de::DeserializeOwned;
+}
+
+/// The plane-strain scene's tables.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlaneTables;
+
+impl Tables for PlaneTables {
+    type Grid = GridSpec;
+    type Body = BodySpec;
+    type Boundaries = BoundariesSpec;
+}
+
+/// A plane-strain scene file.
+pub type SceneFile = SceneFileOf<PlaneTables>;
 
 /// How the initial stresses are found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

@@ -7,37 +7,23 @@
 //! DEM's surface on a terrain grid), `left_wall` and `right_wall` (x = x₀, x₁), `back_wall` and
 //! `front_wall` (z = z₀, z₁); the top is open.
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
 
-use super::{BoundarySpec, GridKind, MaterialSpec, OutputSpec, SolverSpec, exact};
+use super::{BoundarySpec, GridKind, SceneFileOf, Tables, exact};
 
-/// A whole 3D scene file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SpaceFile {
-    /// one-line description, shown by `mpm scenes` and `mpm check`.
-    #[serde(default)]
-    pub title: Option<String>,
-    /// the background grid.
-    pub grid: SpaceGridSpec,
-    /// named materials, referred to by `bodies[].material` (as in 2D).
-    pub materials: BTreeMap<String, MaterialSpec>,
-    /// bodies filled with material points.
-    pub bodies: Vec<SpaceBodySpec>,
-    /// boundary friction laws.
-    #[serde(default)]
-    pub boundaries: SpaceBoundariesSpec,
-    /// time stepping (as in 2D; `gravity = [gx, gy, gz]`).
-    pub solver: SolverSpec,
-    /// what to write (as in 2D; the 2D-only outputs are refused).
-    #[serde(default)]
-    pub output: OutputSpec,
-    /// plausibility warnings this scene means to have, by name.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub silence: Vec<String>,
+/// A 3D scene's tables.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SpaceTables;
+
+impl Tables for SpaceTables {
+    type Grid = SpaceGridSpec;
+    type Body = SpaceBodySpec;
+    type Boundaries = SpaceBoundariesSpec;
 }
+
+/// A whole 3D scene file: the materials, `[solver]` (`gravity` with three components) and
+/// `[output]` tables are the 2D ones; `[initial_state]` is refused by validation (2D only).
+pub type SpaceFile = SceneFileOf<SpaceTables>;
 
 /// `[grid]` of a 3D scene: a regular grid (`origin`, `cell`, `cells`) or the terrain-following
 /// grid over a DEM (`dem`, `from`, `to`, `plan_cell`, `layer_height`, `layers`).

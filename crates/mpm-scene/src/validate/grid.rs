@@ -73,12 +73,13 @@ pub(super) fn build(
                     super::polyline::cut(&profile, &rupture, cell_width).ok_or_else(too_many)?
                 }
             };
-            if !(1..=1_000_000).contains(&rows) {
+            // (the grid's own bound on cells along an axis: one rule for rows and cells)
+            if !(1..=mpm_grid::MAX_CELLS_PER_AXIS as i64).contains(&rows) {
                 return Err(ctx.err(
                     "grid.rows",
                     Some(rows.to_string()),
                     "number of rows out of range",
-                    "1 ≤ rows ≤ 1000000",
+                    format!("1 ≤ rows ≤ {}", mpm_grid::MAX_CELLS_PER_AXIS),
                     "give enough rows to hold the material above the ground at its highest",
                 ));
             }

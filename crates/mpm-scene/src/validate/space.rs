@@ -65,16 +65,7 @@ pub(super) fn load_space(
         ));
     }
     let file: SpaceFile = toml::from_str(text).map_err(|e| {
-        if e.message().contains("unknown field `initial_state`") {
-            ctx.err(
-                "initial_state",
-                None,
-                "the implicit initial state (geostatic) is 2D only",
-                "no `[initial_state]` in a 3D scene",
-                "remove `[initial_state]`; in 3D, let the bodies settle under a ramped gravity \
-                 (`[solver] gravity_ramp`) before the flow starts",
-            )
-        } else if e.message().contains("unknown field `side_walls`") {
+        if e.message().contains("unknown field `side_walls`") {
             ctx.err(
                 "boundaries.side_walls",
                 None,
@@ -87,6 +78,16 @@ pub(super) fn load_space(
             serde_error(&ctx, &e)
         }
     })?;
+    if file.initial_state.is_some() {
+        return Err(ctx.err(
+            "initial_state",
+            None,
+            "the implicit initial state (geostatic) is 2D only",
+            "no `[initial_state]` in a 3D scene",
+            "remove `[initial_state]`; in 3D, let the bodies settle under a ramped gravity \
+             (`[solver] gravity_ramp`) before the flow starts",
+        ));
+    }
     let mut scene = resolve(&ctx, file, text)?;
     scene.dir = dir.map(std::path::Path::to_path_buf);
     scene.inputs = crate::inputs::fingerprints(ctx.inputs.take());
@@ -797,8 +798,9 @@ end_time = 0.1
 
     #[test]
     fn the_geostatic_state_is_refused_as_2d_only() {
-        let e = error(&scene(("", ""), "\n[initial_state]\nkind = \"geostatic\"\n"));
+        let e = error(&scene(("", ""), "\n[initial_state]\nmethod = \"implicit\"\n"));
         assert!(e.contains("`initial_state`") && e.contains("2D only"), "{e}");
+        assert!(e.contains(":45:1:"), "located at the table's header: {e}");
     }
 
     /// Side walls across the plane are a plane-strain model: refused in 3D at their line,
