@@ -24,13 +24,15 @@ use mpm_output::checkpoint::{self, CheckpointFile, History};
 use mpm_output::{OutputError, atomic};
 use mpm_scene::dispatch::{self, Job, SceneModel};
 use mpm_scene::materials::ModelJob;
-use mpm_scene::{RunStatus, RunSummary, Scene};
-use mpm_solver::{EnergyLedger, RunEnd, Solver, SolverError, Vector};
+use mpm_scene::{InitialStateSummary, RunStatus, RunSummary, Scene};
+use mpm_solver::{EnergyLedger, Solver, Vector};
 
+mod serve;
 mod space;
 
+use serve::Served;
+
 use crate::driver::plane::{Plane, initial_state};
-use crate::driver::{Driver, Stepper, Wing};
 use crate::error::RunError;
 use crate::options::RunOptions;
 
@@ -500,135 +502,57 @@ impl Job for Worker {
                 return;
             }
         };
-        let history = History { dt_min: f64::INFINITY, ..History::default() };
-        // the scene as changed by `set_material` (its text goes into checkpoints)
-        let mut current = scene.clone();
-        let mut driver = Driver::begin(Plane::new(scene, initial.clone()), None, history, &opts);
-        if let Err(e) = driver.record_start(&solver) {
-            let _ = self.outbox.send(Reply::Failed(e));
-            return;
-        }
-        let mut history = driver.history;
-        let ready = Reply::Ready {
-            time: solver.time(),
-            steps: solver.step_count(),
-            particles: solver.particles().len(),
+        serve::serve(&mut solver, scene, initial, self.inbox, self.outbox, &opts);
+    }
+}
+
+impl<M: SceneModel, S: ShapeFunctions<N>, const N: usize> Served for Solver<M, S, N> {
+    type Scene = Scene;
+    type Wing<'a> = Plane<'a>;
+
+    fn wing<'a>(
+        &self,
+        scene: &'a Scene,
+        _h: &History,
+        initial: &Option<InitialStateSummary>,
+    ) -> Plane<'a> {
+        Plane::new(scene, initial.clone())
+    }
+
+    fn end_time(scene: &Scene) -> f64 {
+        scene.resolved().end_time
+    }
+
+    fn fields(&self) -> Reply {
+        Reply::Fields(Box::new(fields(self.particles(), self.materials())))
+    }
+
+    fn set_velocities_flat(&mut self, v: &[f64]) -> Result<(), RunError> {
+        let v: Vec<Vector> = v.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
+        self.set_velocities(&v).map_err(|e| argument("velocities", e))
+    }
+
+    fn set_body_force_flat(&mut self, b: Option<&[f64]>) -> Result<(), RunError> {
+        let Some(b) = b else {
+            self.clear_body_force();
+            return Ok(());
         };
-        if self.outbox.send(ready).is_err() {
-            return;
-        }
-        let threads = rayon::current_num_threads();
-        let mut failed = false;
-        while let Ok(command) = self.inbox.recv() {
-            let reply = match command {
-                Command::Advance(limit) => {
-                    if failed {
-                        Reply::Failed(RunError::Setup("the simulation failed earlier".into()))
-                    } else {
-                        let mut driver = Driver::begin(
-                            Plane::new(&current, initial.clone()),
-                            None,
-                            std::mem::take(&mut history),
-                            &opts,
-                        );
-                        let result = advance(&mut solver, &mut driver, limit);
-                        failed = result.is_err();
-                        let reply = outcome(&solver, &driver, result, threads, &|e| e.to_string());
-                        history = driver.history;
-                        Reply::Advanced(Box::new(reply))
-                    }
-                }
-                Command::Fields => {
-                    Reply::Fields(Box::new(fields(solver.particles(), solver.materials())))
-                }
-                Command::Energy => Reply::Energy(solver.energy()),
-                Command::Summary => {
-                    let mut driver =
-                        Driver::begin(Plane::new(&current, initial.clone()), None, history, &opts);
-                    let status = if mpm_solver::reached(solver.time(), r.end_time) {
-                        RunStatus::Completed
-                    } else {
-                        RunStatus::Interrupted
-                    };
-                    let s = driver.summary(&solver, status, None, threads);
-                    history = std::mem::take(&mut driver.history);
-                    Reply::Summary(Box::new(s))
-                }
-                Command::Checkpoint(dir) => Reply::Written(write_checkpoint(
-                    &dir,
-                    CheckpointFile::new(
-                        current.origin(),
-                        current.text(),
-                        current.files_dir(),
-                        current.inputs(),
-                        M::wrap(solver.checkpoint()),
-                        history.clone(),
-                    ),
-                )),
-                _ if failed => {
-                    Reply::Set(Err(RunError::Setup("the simulation failed earlier".into())))
-                }
-                Command::SetVelocities(v) => {
-                    let v: Vec<Vector> =
-                        v.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
-                    Reply::Set(solver.set_velocities(&v).map_err(|e| argument("velocities", e)))
-                }
-                Command::SetBodyForce(None) => {
-                    solver.clear_body_force();
-                    Reply::Set(Ok(()))
-                }
-                Command::SetBodyForce(Some(b)) => {
-                    // (the count was checked against the particles on the caller's side)
-                    let b: Vec<Vector> =
-                        b.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
-                    Reply::Set(
-                        (solver.set_body_force(|p, _| b.get(p).copied().unwrap_or(Vector::NAN)))
-                            .map_err(|e| argument("body_force", e)),
-                    )
-                }
-                Command::SetMaterial { path, value } => {
-                    Reply::Set(set_material(&mut solver, &mut current, &path, &value))
-                }
-            };
-            if self.outbox.send(reply).is_err() {
-                return;
-            }
-        }
+        let b: Vec<Vector> = b.chunks_exact(2).map(|c| Vector::new(c[0], c[1])).collect();
+        (self.set_body_force(|p, _| b.get(p).copied().unwrap_or(Vector::NAN)))
+            .map_err(|e| argument("body_force", e))
     }
-}
 
-/// steps `solver` by `limit` with `driver` recording, timed into its history.
-fn advance<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
-    solver: &mut Solver<M, S, N>,
-    driver: &mut Driver<'_, Plane<'_>>,
-    limit: Limit,
-) -> Result<RunEnd, SolverError> {
-    match limit {
-        Limit::Time(t) => driver.run(solver, t),
-        Limit::Steps(n) => driver.run_steps(solver, n),
-    }
-}
-
-/// the caller's view of an advance (a solver error's message through `describe`).
-pub(crate) fn outcome<W: Wing, Sv: Stepper<Vector = W::Vector>>(
-    sv: &Sv,
-    driver: &Driver<'_, W>,
-    result: Result<RunEnd, Sv::Error>,
-    threads: usize,
-    describe: &dyn Fn(&Sv::Error) -> String,
-) -> Result<Advance, RunError> {
-    let (status, error) = driver.status(&result, sv, describe);
-    match result {
-        Err(e) => Err(RunError::Solver {
-            message: describe(&e),
-            summary: Box::new(driver.summary(sv, status, error, threads)),
-        }),
-        Ok(end) => Ok(Advance {
-            stopped: (end == RunEnd::Stopped).then_some(status),
-            time: sv.time(),
-            steps: sv.step_count(),
-            particles: sv.particles().len(),
-        }),
+    fn set_material(
+        &mut self,
+        current: &mut Scene,
+        path: &str,
+        value: &str,
+    ) -> Result<(), RunError> {
+        let next = current.with_value(path, value)?;
+        let materials = materials_of::<M>(&next.resolved().materials, path, value)?;
+        self.set_materials(materials).map_err(|e| argument(path, e))?;
+        *current = next;
+        Ok(())
     }
 }
 
@@ -658,21 +582,6 @@ pub(crate) fn materials_of<M: SceneModel>(
 /// a solver error of a setter as the argument's error.
 pub(crate) fn argument(name: &str, e: impl std::fmt::Display) -> RunError {
     RunError::Arguments(format!("{name}: {e}"))
-}
-
-/// the scene with `path` = `value`, validated, and its materials given to the solver (the same
-/// model: a changed `kind` is refused).
-fn set_material<M: SceneModel, S: ShapeFunctions<N>, const N: usize>(
-    solver: &mut Solver<M, S, N>,
-    current: &mut Scene,
-    path: &str,
-    value: &str,
-) -> Result<(), RunError> {
-    let next = current.with_value(path, value)?;
-    let materials = materials_of::<M>(&next.resolved().materials, path, value)?;
-    solver.set_materials(materials).map_err(|e| argument(path, e))?;
-    *current = next;
-    Ok(())
 }
 
 fn fields<M: SceneModel>(p: &mpm_solver::Particles<M::State>, materials: &[M]) -> ParticleFields {
