@@ -145,6 +145,8 @@ pub(crate) struct Driver<'a, W> {
     /// particle-steps of this session not yet in the history: the particles of each step
     /// (fewer once some left through outflow sides).
     pub(crate) session_particle_steps: f64,
+    /// when the stepping session under way started (its wall time is not yet in the history).
+    session: Option<Instant>,
 }
 
 /// The peak of the kinetic energy over the series rows so far, and the time of the first row of
@@ -449,17 +451,17 @@ impl<W: Wing> Driver<'_, W> {
         Ok(checkpoint::write(&dir.join(checkpoint::FILE_NAME), &self.checkpoint(sv))?)
     }
 
-    /// the run now as a checkpoint: the solver state, the scene and the history.
+    /// the run now as a checkpoint: the solver state, the scene and the history (with the
+    /// wall time and particle-steps of the session under way, so that a resumed run's figures
+    /// count it).
     pub(crate) fn checkpoint<Sv: Stepper<Vector = W::Vector>>(&self, sv: &Sv) -> CheckpointFile {
         let c = self.wing.common();
-        CheckpointFile::new(
-            c.origin,
-            c.text,
-            c.files_dir,
-            c.inputs,
-            sv.saved(),
-            self.history.clone(),
-        )
+        let mut history = self.history.clone();
+        if let Some(start) = self.session {
+            history.wall_time += start.elapsed().as_secs_f64();
+            history.particle_steps += self.session_particle_steps;
+        }
+        CheckpointFile::new(c.origin, c.text, c.files_dir, c.inputs, sv.saved(), history)
     }
 
     /// the run's summary now (`summary.json`), from its history and the solver's state.

@@ -312,12 +312,12 @@ impl Simulation {
         }
     }
 
-    /// the summary of the run so far: the state's figures (steps, time, Δt, energy ledger and
-    /// check, state hash) as [`run_scene`](crate::run_scene) reports them, the runout measures
-    /// and indicators of the last recorded series row (the scene's `series_interval`; in 3D, of
-    /// the state now, as a 3D run's summary closes with a row), status
-    /// `Completed` once the scene's end time is reached and `Interrupted` before (a stop at rest
-    /// or an energy alarm is the `stopped` of the advance that met it).
+    /// the summary of the run so far, as [`run_scene`](crate::run_scene) would close it now: the
+    /// state's figures (steps, time, Δt, energy ledger and check, state hash) and the runout
+    /// measures and indicators with a closing row of the state now (the run's own series keep
+    /// their rows as they were), status `Completed` once the scene's end time is reached and
+    /// `Interrupted` before, `EnergyAlarm` once the energy alarm has tripped (a stop at rest is
+    /// the `stopped` of the advance that met it).
     pub fn summary(&mut self) -> Result<RunSummary, RunError> {
         self.send(Command::Summary)?;
         match self.wait(&mut || false)? {

@@ -16,6 +16,7 @@
 //! - arrival: the first observation time at which the column holds a particle (0 where the
 //!   source lies).
 
+use glam::DVec3;
 use mpm_solver::Vector;
 use serde::{Deserialize, Serialize};
 
@@ -53,13 +54,32 @@ pub struct Envelope {
     pub stations: Vec<Station>,
 }
 
+/// A particle's velocity as the envelopes sum it: in the plane, or in space (a 3D run's strip
+/// along its runout line, whose lateral speed counts in the speeds and the momentum's size).
+pub trait FlowVelocity: Copy {
+    /// the velocity in space (z = 0 for the plane's: the same sums and lengths to the bit).
+    fn in_space(self) -> DVec3;
+}
+
+impl FlowVelocity for Vector {
+    fn in_space(self) -> DVec3 {
+        DVec3::new(self.x, self.y, 0.0)
+    }
+}
+
+impl FlowVelocity for DVec3 {
+    fn in_space(self) -> DVec3 {
+        self
+    }
+}
+
 /// What one observation sums per column.
 #[derive(Clone, Copy, Default)]
 struct Column {
     top: f64,
     mass: f64,
     volume: f64,
-    momentum: Vector,
+    momentum: DVec3,
     max_speed: f64,
     count: usize,
 }
@@ -84,17 +104,17 @@ impl Envelope {
 
     /// Takes the particles' state at `time` into the maxima. `spacing` is the particle spacing
     /// (a particle's top is half of it above its centre).
-    pub fn observe(
+    pub fn observe<V: FlowVelocity>(
         &mut self,
         time: f64,
         spacing: f64,
-        [position, velocity]: [&[Vector]; 2],
+        (position, velocity): (&[Vector], &[V]),
         [mass, volume]: [&[f64]; 2],
     ) {
         let mut cols =
             vec![Column { top: f64::NEG_INFINITY, ..Default::default() }; self.stations.len()];
         for i in 0..position.len() {
-            let (x, v) = (position[i], velocity[i]);
+            let (x, v) = (position[i], velocity[i].in_space());
             let Some(k) = self.index(x.x) else { continue };
             if !(x.is_finite() && v.is_finite()) {
                 continue;
@@ -173,7 +193,7 @@ mod tests {
         for step in 0..=2000 {
             let t = step as f64 * dt;
             let pos: Vec<Vector> = start.iter().map(|p| *p + t * v).collect();
-            e.observe(t, h, [&pos, &vel], [&mass, &volume]);
+            e.observe(t, h, (&pos, &vel), [&mass, &volume]);
         }
         // after 2 s the block covers [4, 5]: stations up to x = 5 have seen it
         for s in &e.stations[..50] {
@@ -207,7 +227,7 @@ mod tests {
         let at = |dx: f64| Vector::new(x + dx, g + slope * dx + 0.95);
         let pos = [at(-0.049), at(0.0), at(0.049)];
         let zero = [Vector::ZERO; 3];
-        e.observe(0.0, 0.1, [&pos, &zero], [&[1.0; 3], &[1.0; 3]]);
+        e.observe(0.0, 0.1, (&pos, &zero), [&[1.0; 3], &[1.0; 3]]);
         let expect = 1.0 * 30f64.to_radians().cos();
         assert!((e.stations[k].max_thickness - expect).abs() < 1e-12, "{:?}", e.stations[k]);
     }

@@ -28,6 +28,7 @@ impl<'a, W: Wing> Driver<'a, W> {
             stop: None,
             rest,
             session_particle_steps: 0.0,
+            session: None,
         }
     }
 
@@ -123,6 +124,32 @@ impl<'a, W: Wing> Driver<'a, W> {
         Ok(summary)
     }
 
+    /// the summary of the run as it would end now, without ending it: the closing row `finish`
+    /// adds (unless this step was recorded) and the energy alarm judged on it, taken on a copy
+    /// of the history (a caller stepping the run on finds its records as they were).
+    pub(crate) fn summary_now<Sv: Stepper<Vector = W::Vector>>(
+        &mut self,
+        sv: &Sv,
+        status: RunStatus,
+        error: Option<String>,
+        threads: usize,
+    ) -> RunSummary {
+        let kept = self.history.clone();
+        if self.history.energy.last().is_none_or(|row| row.time < sv.time()) {
+            self.record_series(sv);
+        }
+        let threshold = self.wing.common().alarm.threshold;
+        let (status, error) = match status {
+            RunStatus::Completed | RunStatus::AtRest if self.history.alarm_time.is_some() => {
+                (RunStatus::EnergyAlarm, alarm_message(&self.history, threshold))
+            }
+            _ => (status, error),
+        };
+        let summary = self.summary(sv, status, error, threads);
+        self.history = kept;
+        summary
+    }
+
     /// steps `sv` to `end` with this driver observing, the session's wall time and
     /// particle-steps added to the history.
     pub(crate) fn run<Sv: Stepper<Vector = W::Vector>>(
@@ -130,9 +157,9 @@ impl<'a, W: Wing> Driver<'a, W> {
         sv: &mut Sv,
         end: f64,
     ) -> Result<RunEnd, Sv::Error> {
-        let start = Instant::now();
+        self.session = Some(Instant::now());
         let result = sv.run_to(end, self);
-        self.close_session(start);
+        self.close_session();
         result
     }
 
@@ -143,7 +170,8 @@ impl<'a, W: Wing> Driver<'a, W> {
         sv: &mut Sv,
         steps: u64,
     ) -> Result<RunEnd, Sv::Error> {
-        let (steps0, start) = (sv.step_count(), Instant::now());
+        let steps0 = sv.step_count();
+        self.session = Some(Instant::now());
         let result = loop {
             // (once every particle has left through outflow sides there is nothing to step)
             if sv.step_count() - steps0 >= steps || sv.particles().len() == 0 {
@@ -161,13 +189,15 @@ impl<'a, W: Wing> Driver<'a, W> {
                 }
             }
         };
-        self.close_session(start);
+        self.close_session();
         result
     }
 
-    /// adds a stepping session's wall time and particle-steps to the history.
-    fn close_session(&mut self, start: Instant) {
-        self.history.wall_time += start.elapsed().as_secs_f64();
+    /// adds the stepping session's wall time and particle-steps to the history.
+    fn close_session(&mut self) {
+        if let Some(start) = self.session.take() {
+            self.history.wall_time += start.elapsed().as_secs_f64();
+        }
         self.history.particle_steps += std::mem::take(&mut self.session_particle_steps);
     }
 

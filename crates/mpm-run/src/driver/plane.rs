@@ -276,7 +276,7 @@ impl Plane<'_> {
         let r = self.r();
         let p = sv.particles();
         let f = Flow::of(r, &p);
-        e.observe(sv.time(), r.spacing, [&f.position, &f.velocity], [&f.mass, &f.volume]);
+        e.observe(sv.time(), r.spacing, (&f.position, &f.velocity), [&f.mass, &f.volume]);
     }
 }
 

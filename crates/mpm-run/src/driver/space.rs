@@ -29,10 +29,10 @@ pub(crate) struct Space<'a> {
     ground: Vec<DVec2>,
     /// the centre of mass at t = 0 (m).
     com0: Vector,
-    /// the runout line's start: the point of station 0 of the envelopes, on the line through the
-    /// initial centre of mass along the runout direction, at the grid's plan edge (y = 0).
+    /// the runout line's start: the point of station 0 of the envelopes, where the line through
+    /// the flow's initial centre of mass along the runout direction enters the plan (y = 0).
     line_start: Vector,
-    /// the runout line's length across the plan (m).
+    /// the runout line's length across the plan, to where it leaves it (m).
     line_length: f64,
 }
 
@@ -76,8 +76,10 @@ impl<'a> Space<'a> {
         let com0 = match h.initial_centre {
             Some(c) => Vector::from_array(c),
             None => {
-                let mass: f64 = p.mass.iter().sum();
-                p.initial_position.iter().zip(p.mass).map(|(x, m)| *x * *m).sum::<Vector>() / mass
+                // (of the flowing materials: the runout measures', not an obstacle's)
+                let flow = || flowing(scene, &p);
+                let mass: f64 = flow().map(|q| p.mass[q]).sum();
+                flow().map(|q| p.initial_position[q] * p.mass[q]).sum::<Vector>() / mass
             }
         };
         let d = scene.runout_direction;
@@ -105,9 +107,19 @@ impl<'a> Space<'a> {
                     .collect()
             }
         };
-        let line_start = com0 + (s0 - com0.dot(d)) * d;
+        // the runout line's chord across the plan: com0 + t d for t in [t0, t1]
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for (c, lo, hi, da) in [(com0.x, x0, x1, d.x), (com0.z, z0, z1, d.z)] {
+            if da != 0.0 {
+                let (a, b) = ((lo - c) / da, (hi - c) / da);
+                (t0, t1) = (t0.max(a.min(b)), t1.min(a.max(b)));
+            }
+        }
+        let (t0, t1) =
+            if t0 <= t1 && t0.is_finite() && t1.is_finite() { (t0, t1) } else { (0.0, 0.0) };
+        let line_start = com0 + t0 * d;
         let line_start = Vector::new(line_start.x, 0.0, line_start.z);
-        Self { scene, common, ground, com0, line_start, line_length: s1 - s0 }
+        Self { scene, common, ground, com0, line_start, line_length: t1 - t0 }
     }
 
     /// the section the envelopes follow: the runout line on the map (x, −z).
@@ -120,47 +132,53 @@ impl<'a> Space<'a> {
         }
     }
 
+    /// the ground along the runout line, at the plan cells' spacing: (station from the line's
+    /// start, height).
+    fn line_ground(&self) -> Vec<DVec2> {
+        let (g, d) = (&self.scene.grid, self.scene.runout_direction);
+        let n = (self.line_length / g.plan_cell()).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|k| {
+                let s = self.line_length * k as f64 / n as f64;
+                let x = self.line_start + s * d;
+                let y = match g {
+                    SpaceGrid::Regular(r) => r.origin().y,
+                    SpaceGrid::Terrain(_) => g.ground(x.x, x.z).0,
+                };
+                DVec2::new(s, y)
+            })
+            .collect()
+    }
+
     /// the flowing particles in the strip one plan cell wide about the runout line, in the
-    /// line's vertical plane: (station from the line's start, height) and velocity (horizontal
-    /// speed signed along the line, vertical), so that a speed keeps its 3D magnitude; with
-    /// their masses and volumes.
+    /// line's vertical plane (station from the line's start, height), with their velocities in
+    /// space (a lateral speed counts in the envelopes' speeds), masses and volumes.
     fn strip(
         &self,
         p: &View<'_, Vector>,
         at: &[Vector],
-    ) -> (Vec<DVec2>, Vec<DVec2>, Vec<f64>, Vec<f64>) {
+    ) -> (Vec<DVec2>, Vec<Vector>, Vec<f64>, Vec<f64>) {
         let d = self.scene.runout_direction;
         let n = Vector::new(-d.z, 0.0, d.x);
         let half = 0.5 * self.scene.grid.plan_cell();
         let (mut x, mut v, mut m, mut vol) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for q in self.flowing(p) {
+        for q in flowing(self.scene, p) {
             let r = at[q] - self.line_start;
-            let w = r.dot(n);
-            if !(-half..half).contains(&w) {
+            // (half-open: a particle on the strip's edge counts on one side only)
+            if !(-half..half).contains(&r.dot(n)) {
                 continue;
             }
-            let u = p.velocity[q];
-            let (along, across) = (u.dot(d), u.dot(n));
             x.push(DVec2::new(r.dot(d), at[q].y));
-            v.push(DVec2::new(along.hypot(across).copysign(along), u.y));
+            v.push(p.velocity[q]);
             m.push(p.mass[q]);
             vol.push(p.volume[q]);
         }
         (x, v, m, vol)
     }
 
-    /// the indices of the particles of flowing materials (not obstacles; as the runout measures).
-    fn flowing<'p>(&self, p: &'p View<'_, Vector>) -> impl Iterator<Item = usize> + 'p {
-        let mask = self.scene.materials.flow_mask();
-        let material = p.material;
-        (0..p.len()).filter(move |&q| {
-            mask.as_ref().is_none_or(|m| m.get(usize::from(material[q])).copied().unwrap_or(true))
-        })
-    }
-
     /// the flowing particles' positions now.
     fn flow_positions(&self, p: &View<'_, Vector>) -> Vec<Vector> {
-        self.flowing(p).map(|q| p.position[q]).collect()
+        flowing(self.scene, p).map(|q| p.position[q]).collect()
     }
 
     /// the deposit's depth per plan cell of `e`: normal to the ground, and vertical.
@@ -176,7 +194,7 @@ impl<'a> Space<'a> {
     fn observe_envelope<Sv: Stepper<Vector = Vector>>(&self, e: &mut Envelope, sv: &Sv) {
         let p = sv.particles();
         let (x, v, m, vol) = self.strip(&p, p.position);
-        e.observe(sv.time(), self.common.spacing, [&x, &v], [&m, &vol]);
+        e.observe(sv.time(), self.common.spacing, (&x, &v), [&m, &vol]);
     }
 
     /// takes the flowing particles' state now into the hazard maps `e`.
@@ -188,7 +206,7 @@ impl<'a> Space<'a> {
             e.observe(sv.time(), spacing, [p.position, p.velocity], [p.mass, p.volume], ground);
             return;
         }
-        let keep: Vec<usize> = self.flowing(&p).collect();
+        let keep: Vec<usize> = flowing(self.scene, &p).collect();
         let pick = |v: &[Vector]| -> Vec<Vector> { keep.iter().map(|&q| v[q]).collect() };
         let pick_f = |v: &[f64]| -> Vec<f64> { keep.iter().map(|&q| v[q]).collect() };
         e.observe(
@@ -199,6 +217,15 @@ impl<'a> Space<'a> {
             ground,
         );
     }
+}
+
+/// the indices of the particles of flowing materials (not obstacles; as the runout measures).
+fn flowing<'p>(scene: &SpaceScene, p: &'p View<'_, Vector>) -> impl Iterator<Item = usize> + 'p {
+    let mask = scene.materials.flow_mask();
+    let material = p.material;
+    (0..p.len()).filter(move |&q| {
+        mask.as_ref().is_none_or(|m| m.get(usize::from(material[q])).copied().unwrap_or(true))
+    })
 }
 
 /// The main mass of a 3D run in plan: the particles (indices into `positions`) of the heaviest
@@ -263,7 +290,8 @@ impl Wing for Space<'_> {
             |x: Vector| x.y - g.ground(x.x, x.z).0,
         ));
         h.initial_centre = Some(self.com0.to_array());
-        let crown = p.initial_position.iter().copied().max_by(|a, b| a.y.total_cmp(&b.y));
+        let crown =
+            flowing(scene, &p).map(|q| p.initial_position[q]).max_by(|a, b| a.y.total_cmp(&b.y));
         h.crown = Some(crown.unwrap_or(Vector::ZERO).to_array());
         if scene.output.hazard_maps {
             let [nx, _, nz] = g.cells();
@@ -272,10 +300,7 @@ impl Wing for Space<'_> {
             h.plan = Some(e);
         }
         if scene.output.envelope {
-            let s0 = self.ground.first().map_or(0.0, |g| g.x);
-            let ground: Vec<DVec2> =
-                self.ground.iter().map(|g| DVec2::new(g.x - s0, g.y)).collect();
-            let mut e = Envelope::new(&ground, g.plan_cell());
+            let mut e = Envelope::new(&self.line_ground(), g.plan_cell());
             self.observe_envelope(&mut e, sv);
             h.envelope = Some(e);
         }
@@ -295,7 +320,7 @@ impl Wing for Space<'_> {
     fn metrics<Sv: Stepper<Vector = Vector>>(&self, h: &History, sv: &Sv) -> RunoutMetrics {
         let p = sv.particles();
         let d = self.scene.runout_direction;
-        let keep: Vec<usize> = self.flowing(&p).collect();
+        let keep: Vec<usize> = flowing(self.scene, &p).collect();
         // every flowing particle has left through outflow sides: the measures stay where they
         // were last taken
         if keep.is_empty()
@@ -352,7 +377,7 @@ impl Wing for Space<'_> {
     fn grains<Sv: Stepper<Vector = Vector>>(&self, sv: &Sv) -> Vec<Grain> {
         let p = sv.particles();
         let g = &self.scene.grid;
-        self.flowing(&p)
+        flowing(self.scene, &p)
             .map(|q| {
                 let x = p.position[q];
                 Grain { position: x.to_array(), ground: g.ground(x.x, x.z).0, mass: p.mass[q] }
@@ -362,7 +387,7 @@ impl Wing for Space<'_> {
 
     fn flow_mass<Sv: Stepper<Vector = Vector>>(&self, sv: &Sv) -> f64 {
         let p = sv.particles();
-        self.flowing(&p).map(|q| p.mass[q]).sum()
+        flowing(self.scene, &p).map(|q| p.mass[q]).sum()
     }
 
     fn probe_direction(&self) -> Vector {
@@ -439,7 +464,7 @@ impl Wing for Space<'_> {
                 })
                 .collect();
             let mut release = vec![false; e.rows * e.cols];
-            for q in self.flowing(&p) {
+            for q in flowing(self.scene, &p) {
                 let x = p.initial_position[q];
                 let (c, r) = ((x.x - e.x0) / e.cell, (x.z - e.z0) / e.cell);
                 if c >= 0.0 && r >= 0.0 && (c as usize) < e.cols && (r as usize) < e.rows {
@@ -463,7 +488,7 @@ impl Wing for Space<'_> {
         }
         if self.common.plots {
             // the flowing particles, north (−z) up as in maps/
-            let plan = |v: &[Vector]| self.flowing(&p).map(|q| (v[q].x, -v[q].z)).collect();
+            let plan = |v: &[Vector]| flowing(self.scene, &p).map(|q| (v[q].x, -v[q].z)).collect();
             let deposit = report::PlanDeposit {
                 positions: plan(p.position),
                 initial: plan(p.initial_position),

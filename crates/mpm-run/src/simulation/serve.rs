@@ -91,7 +91,7 @@ pub(crate) fn serve<Sv: Served>(
                     Limit::Steps(n) => d.run_steps(sv, n),
                 };
                 failed = result.is_err();
-                let reply = outcome(sv, &d, result, threads, &describe);
+                let reply = outcome(sv, &mut d, result, threads, &describe);
                 history = d.history;
                 Reply::Advanced(Box::new(reply))
             }
@@ -104,8 +104,8 @@ pub(crate) fn serve<Sv: Served>(
                     RunStatus::Interrupted
                 };
                 let wing = sv.wing(&current, &history, &initial);
-                let d = Driver::begin(wing, None, std::mem::take(&mut history), opts);
-                let s = d.summary(sv, status, None, threads);
+                let mut d = Driver::begin(wing, None, std::mem::take(&mut history), opts);
+                let s = d.summary_now(sv, status, None, threads);
                 history = d.history;
                 Reply::Summary(Box::new(s))
             }
@@ -132,7 +132,7 @@ pub(crate) fn serve<Sv: Served>(
 /// the caller's view of an advance (a solver error's message through `describe`).
 fn outcome<W: Wing, Sv: Stepper<Vector = W::Vector>>(
     sv: &Sv,
-    driver: &Driver<'_, W>,
+    driver: &mut Driver<'_, W>,
     result: Result<mpm_solver::RunEnd, Sv::Error>,
     threads: usize,
     describe: &dyn Fn(&Sv::Error) -> String,
@@ -141,7 +141,7 @@ fn outcome<W: Wing, Sv: Stepper<Vector = W::Vector>>(
     match result {
         Err(e) => Err(RunError::Solver {
             message: describe(&e),
-            summary: Box::new(driver.summary(sv, status, error, threads)),
+            summary: Box::new(driver.summary_now(sv, status, error, threads)),
         }),
         Ok(end) => Ok(Advance {
             stopped: (end == mpm_solver::RunEnd::Stopped).then_some(status),

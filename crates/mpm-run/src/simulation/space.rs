@@ -1,6 +1,6 @@
 //! The 3D worker of [`crate::Simulation`]: the 3D solver built with the scene's types, serving
-//! the commands the 2D worker serves, recording through the 3D run's driver
-//! ([`crate::space`]) as a run without an output folder does.
+//! the caller's commands through the loop both dimensions share (`serve.rs`), recording through
+//! the run driver with its 3D wing ([`crate::driver`]) as a run without an output folder does.
 
 use mpm_grid3d::ShapeFunctions;
 use mpm_output::checkpoint::History;

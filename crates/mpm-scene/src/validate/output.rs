@@ -5,7 +5,7 @@ use mpm_solver::{Boundaries, Vector};
 
 use super::{Ctx, finite_pos, num, pair, polyline};
 use crate::error::SceneError;
-use crate::file::{ObservedSpec, OutputSpec, ProbeSpec, ReferenceCurve, VtkField};
+use crate::file::{ObservedSpec, OutputSpec, ProbeSpec, ReferenceCurve, VtkField, VtkFormat};
 use crate::ground::{ground_height, segment_at};
 use crate::limits::MAX_PROBES;
 use crate::observed::ObservedDeposit;
@@ -39,6 +39,51 @@ pub(super) fn build(
             "remove it (a 2D section runs along x)",
         ));
     }
+    let c = cadence(ctx, o, end_time)?;
+    let probes = probes(ctx, o, seeds.len(), 2, |at| {
+        let at = Vector::new(at[0], at[1]);
+        nearest(seeds.iter().map(|s| s.position.distance_squared(at)))
+    })?;
+    let reference = match o.reference {
+        None => None,
+        Some(curve) => Some(reference(ctx, curve, &probes, seeds, grid, boundaries, gravity)?),
+    };
+    Ok(ResolvedOutput {
+        interval: c.interval,
+        series_interval: c.series_interval,
+        exact_times: c.exact_times,
+        fields: c.fields,
+        vtk: c.vtk,
+        vtk_format: c.vtk_format,
+        plots: c.plots,
+        probes,
+        reference,
+        checkpoint_interval: c.checkpoint_interval,
+        envelope: c.envelope,
+        observed: match &o.observed {
+            None => None,
+            Some(spec) => Some(observed(ctx, spec, grid, ground)?),
+        },
+    })
+}
+
+/// What `[output]` means alike in both dimensions: when frames, series rows and checkpoints are
+/// taken, which fields a frame holds, and whether plots and envelopes are drawn.
+pub(super) struct Cadence {
+    pub(super) interval: f64,
+    pub(super) series_interval: f64,
+    pub(super) checkpoint_interval: Option<f64>,
+    pub(super) exact_times: bool,
+    pub(super) fields: Vec<VtkField>,
+    pub(super) vtk: bool,
+    pub(super) vtk_format: VtkFormat,
+    pub(super) plots: bool,
+    pub(super) envelope: bool,
+}
+
+/// `[output]`'s intervals (at most 1e6 frames or checkpoints and 1e7 series rows over
+/// `end_time`), its fields (each once) and its switches, for a scene of either dimension.
+pub(super) fn cadence(ctx: &Ctx<'_>, o: &OutputSpec, end_time: f64) -> Result<Cadence, SceneError> {
     let interval = o.interval.unwrap_or(end_time / 50.0);
     if !(finite_pos(interval) && end_time / interval <= 1e6) {
         return Err(ctx.range(
@@ -81,30 +126,16 @@ pub(super) fn build(
             ));
         }
     }
-    let probes = probes(ctx, o, seeds.len(), 2, |at| {
-        let at = Vector::new(at[0], at[1]);
-        nearest(seeds.iter().map(|s| s.position.distance_squared(at)))
-    })?;
-    let reference = match o.reference {
-        None => None,
-        Some(curve) => Some(reference(ctx, curve, &probes, seeds, grid, boundaries, gravity)?),
-    };
-    Ok(ResolvedOutput {
+    Ok(Cadence {
         interval,
         series_interval,
+        checkpoint_interval: o.checkpoint_interval,
         exact_times: o.exact_times.unwrap_or(false),
         fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
         vtk: o.vtk.unwrap_or(true),
         vtk_format: o.vtk_format.unwrap_or_default(),
         plots: o.plots.unwrap_or(true),
-        probes,
-        reference,
-        checkpoint_interval: o.checkpoint_interval,
         envelope: o.envelope.unwrap_or(false),
-        observed: match &o.observed {
-            None => None,
-            Some(spec) => Some(observed(ctx, spec, grid, ground)?),
-        },
     })
 }
 

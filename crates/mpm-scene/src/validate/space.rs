@@ -494,31 +494,7 @@ fn output(
              and summary.json)",
         ));
     }
-    if let Some(c) = o.checkpoint_interval {
-        // (a bound like the frames': with `exact_times` every mark is also a step's end)
-        if !(finite_pos(c) && f.solver.end_time / c <= 1e6) {
-            return Err(ctx.range(
-                "output.checkpoint_interval",
-                c,
-                "0 < checkpoint_interval, at most 1e6 checkpoints over end_time (s of simulated \
-                 time)",
-                "give the simulated time between checkpoints, or remove it",
-            ));
-        }
-    }
-    let end = f.solver.end_time;
-    let interval = o.interval.unwrap_or(end / 50.0);
-    let series_interval = o.series_interval.unwrap_or(interval.min(end / 200.0));
-    for (path, v) in [("output.interval", interval), ("output.series_interval", series_interval)] {
-        if !(finite_pos(v) && v >= end * 1e-7) {
-            return Err(ctx.range(
-                path,
-                v,
-                "end_time × 1e-7 ≤ interval (s)",
-                "give the simulated time between outputs in seconds",
-            ));
-        }
-    }
+    let c = super::output::cadence(ctx, o, f.solver.end_time)?;
     let hazard_maps = o.hazard_maps.unwrap_or(false);
     let [nx, _, nz] = grid.cells();
     // per plan cell: its maxima (56 B) and one observation's sums (64 B)
@@ -587,16 +563,16 @@ fn output(
     Ok(SpaceOutput {
         observed,
         probes,
-        interval,
-        series_interval,
-        exact_times: o.exact_times.unwrap_or(false),
-        vtk: o.vtk.unwrap_or(true),
-        vtk_format: o.vtk_format.unwrap_or_default(),
-        fields: o.fields.clone().unwrap_or_else(|| VtkField::ALL.to_vec()),
-        plots: o.plots.unwrap_or(true),
-        checkpoint_interval: o.checkpoint_interval,
+        interval: c.interval,
+        series_interval: c.series_interval,
+        exact_times: c.exact_times,
+        vtk: c.vtk,
+        vtk_format: c.vtk_format,
+        fields: c.fields,
+        plots: c.plots,
+        checkpoint_interval: c.checkpoint_interval,
         hazard_maps,
-        envelope: o.envelope.unwrap_or(false),
+        envelope: c.envelope,
         crs: mpm_dem::Crs::default(),
     })
 }
@@ -782,6 +758,17 @@ end_time = 0.1
             "",
         );
         load_space_str(&closed, "test.toml").unwrap();
+    }
+
+    /// `[output]` is one table in both dimensions, checked by one function: a field listed
+    /// twice (a .vtp with two arrays of one name) and more than 1e6 frames are refused in 3D as
+    /// in 2D, at their paths.
+    #[test]
+    fn the_output_table_is_checked_as_in_2d() {
+        let twice = error(&scene(("", ""), "\n[output]\nfields = [\"velocity\", \"velocity\"]\n"));
+        assert!(twice.contains("`output.fields[1]`") && twice.contains("listed twice"), "{twice}");
+        let frames = error(&scene(("", ""), "\n[output]\ninterval = 1e-9\n"));
+        assert!(frames.contains("`output.interval`") && frames.contains("1e6 frames"), "{frames}");
     }
 
     /// A plan too large for one raster (2²⁸ cells) is refused when the scene loads, not after
