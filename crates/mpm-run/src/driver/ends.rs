@@ -116,10 +116,11 @@ impl<'a, W: Wing> Driver<'a, W> {
         self.flush_series()?;
         let summary = self.summary(sv, status, error, threads);
         if let Some(dir) = self.dir {
-            self.wing.files(&self.history, sv, dir, &summary)?;
+            // (the summary first: a failure to draw a map or a plot leaves it readable)
             let json = serde_json::to_string_pretty(&summary)
                 .map_err(|e| RunError::Setup(format!("cannot encode summary.json: {e}")))?;
             atomic::write(&dir.join("summary.json"), json.as_bytes())?;
+            self.wing.files(&self.history, sv, dir, &summary)?;
         }
         Ok(summary)
     }
