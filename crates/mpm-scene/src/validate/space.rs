@@ -64,21 +64,11 @@ pub(super) fn load_space(
             "keep `dimension = 3`, or load the 2D scene as a scene of its own",
         ));
     }
-    let file: SpaceFile = toml::from_str(text).map_err(|e| {
-        if e.message().contains("unknown field `side_walls`") {
-            ctx.err(
-                "boundaries.side_walls",
-                None,
-                "side walls across the plane are a plane-strain (2D) model",
-                "no `side_walls` in a 3D scene",
-                "in 3D the channel's walls are faces of the grid: declare `back_wall` and \
-                 `front_wall` with their friction, e.g. `{ friction_angle_deg = 20.0 }`",
-            )
-        } else {
-            serde_error(&ctx, &e)
-        }
-    })?;
-    if file.initial_state.is_some() {
+    // The plane-strain tables, refused before their own fields are read (whatever they hold,
+    // they are 2D only).
+    let table = text.parse::<toml::Table>().unwrap_or_default();
+    let boundaries = table.get("boundaries").and_then(toml::Value::as_table);
+    if table.contains_key("initial_state") {
         return Err(ctx.err(
             "initial_state",
             None,
@@ -88,6 +78,17 @@ pub(super) fn load_space(
              (`[solver] gravity_ramp`) before the flow starts",
         ));
     }
+    if boundaries.is_some_and(|b| b.contains_key("side_walls")) {
+        return Err(ctx.err(
+            "boundaries.side_walls",
+            None,
+            "side walls across the plane are a plane-strain (2D) model",
+            "no `side_walls` in a 3D scene",
+            "in 3D the channel's walls are faces of the grid: declare `back_wall` and \
+             `front_wall` with their friction, e.g. `{ friction_angle_deg = 20.0 }`",
+        ));
+    }
+    let file: SpaceFile = toml::from_str(text).map_err(|e| serde_error(&ctx, &e))?;
     let mut scene = resolve(&ctx, file, text)?;
     scene.dir = dir.map(std::path::Path::to_path_buf);
     scene.inputs = crate::inputs::fingerprints(ctx.inputs.take());
@@ -785,9 +786,11 @@ end_time = 0.1
 
     #[test]
     fn the_geostatic_state_is_refused_as_2d_only() {
-        let e = error(&scene(("", ""), "\n[initial_state]\nmethod = \"implicit\"\n"));
-        assert!(e.contains("`initial_state`") && e.contains("2D only"), "{e}");
-        assert!(e.contains(":45:1:"), "located at the table's header: {e}");
+        for table in ["method = \"implicit\"", "kind = \"geostatic\""] {
+            let e = error(&scene(("", ""), &format!("\n[initial_state]\n{table}\n")));
+            assert!(e.contains("`initial_state`") && e.contains("2D only"), "{table}: {e}");
+            assert!(e.contains(":45:1:"), "located at the table's header: {e}");
+        }
     }
 
     /// Side walls across the plane are a plane-strain model: refused in 3D at their line,
