@@ -366,15 +366,10 @@ fn a_3d_simulation_is_the_run_itself_and_is_steered_between_steps() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Hazard maps of a 0.4 × 0.2 × 0.4 m elastic block sliding without gravity at 2 m/s along x
-/// over a frictionless floor (a rigid translation): every plan cell it passes sees the height
-/// 0.2 m (its top particles' centres plus half a spacing), speeds of 2 m/s, ρ u² = 6 400 Pa
-/// and h u = 0.4 m²/s; it arrives at the first step after its front particle's centre reaches
-/// the cell; the final deposit covers 0.4 × 0.4 m² at 0.2 m (0.032 m³) and the swept area is
-/// 1.4 × 0.4 m². Tolerance 1e-9: the velocity field stays uniform to round-off.
-#[test]
-fn a_rigidly_sliding_block_draws_exact_hazard_maps() {
-    let text = r#"
+/// A block 0.4 × 0.2 × 0.4 m sliding rigidly at 2 m/s along +x for 0.5 s (no gravity, a
+/// frictionless floor), with `output` added to its `[output]` table (no frames, no plots).
+fn sliding_block(output: &str) -> String {
+    let scene = r#"
 [grid]
 dimension = 3
 kind = "regular"
@@ -400,9 +395,19 @@ end_time = 0.5
 [output]
 vtk = false
 plots = false
-hazard_maps = true
 "#;
-    let scene = mpm_scene::load_space_str(text, "slide").unwrap();
+    format!("{scene}{output}\n")
+}
+
+/// Hazard maps of a 0.4 × 0.2 × 0.4 m elastic block sliding without gravity at 2 m/s along x
+/// over a frictionless floor (a rigid translation): every plan cell it passes sees the height
+/// 0.2 m (its top particles' centres plus half a spacing), speeds of 2 m/s, ρ u² = 6 400 Pa
+/// and h u = 0.4 m²/s; it arrives at the first step after its front particle's centre reaches
+/// the cell; the final deposit covers 0.4 × 0.4 m² at 0.2 m (0.032 m³) and the swept area is
+/// 1.4 × 0.4 m². Tolerance 1e-9: the velocity field stays uniform to round-off.
+#[test]
+fn a_rigidly_sliding_block_draws_exact_hazard_maps() {
+    let scene = mpm_scene::load_space_str(&sliding_block("hazard_maps = true"), "slide").unwrap();
     let dir = std::env::temp_dir().join(format!("mpm-hazard3d-{}", std::process::id()));
     let s = mpm_run::run_space_scene(
         &scene,
@@ -449,35 +454,7 @@ hazard_maps = true
 /// (a uniform velocity field stays uniform to round-off).
 #[test]
 fn a_rigidly_sliding_block_draws_exact_envelopes_along_its_runout_line() {
-    let text = r#"
-[grid]
-dimension = 3
-kind = "regular"
-origin = [0.0, 0.0, 0.0]
-cell = [0.1, 0.1, 0.1]
-cells = [20, 4, 10]
-[materials.block]
-kind = "elastic"
-young = 1.0e6
-poisson = 0.3
-density = 1600.0
-[[bodies]]
-material = "block"
-shape = "box"
-min = [0.2, 0.0, 0.3]
-max = [0.6, 0.2, 0.7]
-velocity = [2.0, 0.0, 0.0]
-[boundaries]
-ground = "frictionless"
-[solver]
-gravity = [0.0, 0.0, 0.0]
-end_time = 0.5
-[output]
-vtk = false
-plots = false
-envelope = true
-"#;
-    let scene = mpm_scene::load_space_str(text, "slide").unwrap();
+    let scene = mpm_scene::load_space_str(&sliding_block("envelope = true"), "slide").unwrap();
     let dir = std::env::temp_dir().join(format!("mpm-envelope3d-{}", std::process::id()));
     mpm_run::run_space_scene(
         &scene,

@@ -98,21 +98,10 @@ impl<'a, W: Wing> Driver<'a, W> {
             self.write_checkpoint(sv)?;
         }
         // the final state: a last series row and frame unless this very step was recorded.
-        let t = sv.time();
-        if self.history.energy.last().is_none_or(|row| row.time < t) {
-            self.record_series(sv);
-        }
-        if self.history.frames.last().is_none_or(|f| f.0 < t) {
+        let (status, error) = self.closing_row(sv, status, error);
+        if self.history.frames.last().is_none_or(|f| f.0 < sv.time()) {
             self.write_frame(sv)?;
         }
-        // The final row may trip the alarm: a run is judged on its last state too.
-        let threshold = self.wing.common().alarm.threshold;
-        let (status, error) = match status {
-            RunStatus::Completed | RunStatus::AtRest if self.history.alarm_time.is_some() => {
-                (RunStatus::EnergyAlarm, alarm_message(&self.history, threshold))
-            }
-            _ => (status, error),
-        };
         self.flush_series()?;
         let summary = self.summary(sv, status, error, threads);
         if let Some(dir) = self.dir {
@@ -136,19 +125,31 @@ impl<'a, W: Wing> Driver<'a, W> {
         threads: usize,
     ) -> RunSummary {
         let kept = self.history.clone();
+        let (status, error) = self.closing_row(sv, status, error);
+        let summary = self.summary(sv, status, error, threads);
+        self.history = kept;
+        summary
+    }
+
+    /// a series row of the state now unless this very step was recorded, and how the run ends
+    /// judged on it: a completed run or one at rest whose energy alarm tripped (on this row
+    /// too) ends with the alarm.
+    fn closing_row<Sv: Stepper<Vector = W::Vector>>(
+        &mut self,
+        sv: &Sv,
+        status: RunStatus,
+        error: Option<String>,
+    ) -> (RunStatus, Option<String>) {
         if self.history.energy.last().is_none_or(|row| row.time < sv.time()) {
             self.record_series(sv);
         }
         let threshold = self.wing.common().alarm.threshold;
-        let (status, error) = match status {
+        match status {
             RunStatus::Completed | RunStatus::AtRest if self.history.alarm_time.is_some() => {
                 (RunStatus::EnergyAlarm, alarm_message(&self.history, threshold))
             }
             _ => (status, error),
-        };
-        let summary = self.summary(sv, status, error, threads);
-        self.history = kept;
-        summary
+        }
     }
 
     /// steps `sv` to `end` with this driver observing, the session's wall time and
