@@ -83,12 +83,7 @@ impl<'a> Flow<'a> {
     /// what the runout measures of an endless slope follow (R3-15: the centre of mass of a mass
     /// thrown across the seam moved backwards).
     fn unwrapped(r: &Resolved, p: &View<'a, Vector>) -> Self {
-        let position = if p.unwrap.is_empty() {
-            Cow::Borrowed(p.position)
-        } else {
-            Cow::Owned((0..p.len()).map(|q| p.unwrapped_position(q)).collect())
-        };
-        Self::with_positions(r, p, position)
+        Self::with_positions(r, p, p.unwrapped())
     }
 
     fn of(r: &Resolved, p: &View<'a, Vector>) -> Self {

@@ -68,7 +68,7 @@ pub(crate) struct View<'a, V> {
     pub(crate) unwrap: &'a [f64],
 }
 
-impl<V: Point> View<'_, V> {
+impl<'a, V: Point> View<'a, V> {
     pub(crate) fn len(&self) -> usize {
         self.position.len()
     }
@@ -80,7 +80,7 @@ impl<V: Point> View<'_, V> {
     }
 
     /// every particle's position had it never wrapped (borrowed without periodic sides).
-    pub(crate) fn unwrapped(&self) -> Cow<'_, [V]> {
+    pub(crate) fn unwrapped(&self) -> Cow<'a, [V]> {
         if self.unwrap.is_empty() {
             Cow::Borrowed(self.position)
         } else {
