@@ -20,6 +20,7 @@
 
 use mpm_constitutive::ConstitutiveModel;
 use mpm_grid::{ShapeFunctions, stencil_nodes};
+use std::cell::Cell;
 use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
@@ -197,9 +198,15 @@ fn apic_update<S: ShapeFunctions<N>, const N: usize>(
         .map(|(c, ((xs, vs), cs))| {
             for (j, ((x, vp), cp)) in xs.iter_mut().zip(vs.iter_mut()).zip(cs).enumerate() {
                 let q = c * chunk + j;
-                let (v_new, mut c_new) =
-                    shape.interpolate(&factors[q], |k| end[idx[q][k] as usize]);
-                if idx[q].iter().any(|&i| light[i as usize]) {
+                // whether a stencil node is light, read with its end velocity (one pass over
+                // the stencil's indices)
+                let touches_light = Cell::new(false);
+                let (v_new, mut c_new) = shape.interpolate(&factors[q], |k| {
+                    let i = idx[q][k] as usize;
+                    touches_light.set(touches_light.get() | light[i]);
+                    end[i]
+                });
+                if touches_light.get() {
                     let nodes = stencil_nodes::<N>(first[q]);
                     let (x0, c0) = (*x, *cp);
                     c_new = shape.gradient(&factors[q], |k| {
