@@ -10,6 +10,8 @@
 //!   `target/runout/` and `docs/runout.md` (`RUNOUT_ONLY=TEXT` runs the cases whose label has it).
 //! - `dem`: the worked example's synthetic valley-side DEM (ASCII grid and GeoTIFF) and its
 //!   rupture surface, in `docs/examples/valley/`.
+//! - `icount [--bless]`: the instructions a few fixed small runs execute (valgrind's callgrind)
+//!   against `benches/icount.toml`; exits non-zero if one grew by more than 2 %.
 //! - `extremes`: scenes at the edges of the admissible settings, each with its expected outcome
 //!   (completes within the energy bound, or stops with a named error); `target/extremes/`.
 
@@ -18,6 +20,7 @@ mod column;
 mod dem;
 mod extremes;
 mod flume;
+mod icount;
 mod plot;
 mod presets;
 mod runout;
@@ -40,6 +43,8 @@ commands:
                      side-by-side against Taichi, which needs `pip install taichi`)
   runout [--quick]   column collapses against the experiments, model by model, into
                      docs/runout.md (RUNOUT_ONLY=TEXT: only the cases whose label has TEXT)
+  icount [--bless]   count the instructions of a few fixed small runs (valgrind's callgrind)
+                     against benches/icount.toml: fails on 2 % growth (--bless: rewrite it)
   extremes           run scenes at the edges of the settings and tabulate their outcomes
   dem                write the worked example's synthetic valley-side DEM (docs/examples/valley/)
   help               this text";
@@ -52,7 +57,9 @@ fn main() -> ExitCode {
     };
     let options = &args[1..];
     let quick = options.iter().any(|a| a == "--quick");
-    if let Some(bad) = options.iter().find(|a| *a != "--quick") {
+    let bless = options.iter().any(|a| a == "--bless");
+    let allowed = if command == "icount" { "--bless" } else { "--quick" };
+    if let Some(bad) = options.iter().find(|a| *a != allowed) {
         eprintln!("unknown option `{bad}`\n\n{USAGE}");
         return ExitCode::FAILURE;
     }
@@ -65,6 +72,7 @@ fn main() -> ExitCode {
         "study" => study::run(quick),
         "bench" => bench::run(quick),
         "runout" => runout::run(quick),
+        "icount" => icount::run(bless),
         "extremes" => extremes::run(),
         "dem" => dem::run(),
         "help" | "--help" | "-h" => {
