@@ -93,7 +93,9 @@ pub trait ShapeFunctions<const N: usize>: Send + Sync {
     /// value and the gradient (1/m) of the field the nodes carry, at the point. The default
     /// forms the N weights and gradients and sums node by node; tensor-product functions in
     /// space override it with sums factorised per axis (the same terms, fewer products, other
-    /// round-off).
+    /// round-off). Every implementation calls `value` exactly once per slot, whatever its
+    /// weight: a caller may observe the nodes it reads through it (APIC's G2P notes a light
+    /// node there).
     #[inline(always)]
     fn interpolate(&self, f: &Self::Factors, value: impl Fn(usize) -> Vector) -> (Vector, Matrix) {
         let (w, g) = (self.weights(f), self.gradients(f));
