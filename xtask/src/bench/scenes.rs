@@ -137,8 +137,12 @@ pub fn whole_scenes(text: &mut String, repeats: usize) -> Result<()> {
          most (the results are the same bits for any count).\n\n{}",
         scenes.markdown()
     );
-    let speedups: Vec<String> =
-        ratios.iter().map(|(n, r, t)| format!("{n} particles {r:.2}× ({t} threads)")).collect();
+    let speedups: Vec<String> = ratios
+        .iter()
+        .map(|(n, r, t)| {
+            format!("{n} particles {r:.2}× ({t} {})", if *t == 1 { "thread" } else { "threads" })
+        })
+        .collect();
     let _ = writeln!(text, "Two threads against one on the columns: {}.\n", speedups.join(", "));
 
     let mut frames = Table::new(&["vtk_format", "one frame (MB)", "written in (s)"]);
